@@ -1,0 +1,88 @@
+"""``sumo-avoid``: run scenarios and print their metrics.
+
+Bad input (a malformed scenario or override) prints one line to stderr naming the file, the key
+and what was expected, and exits with code 2, before anything is written.
+"""
+from __future__ import annotations
+
+import argparse
+import datetime
+import pathlib
+import sys
+
+from .config import ScenarioError
+
+EXIT_BAD_INPUT = 2
+
+
+def _parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="sumo-avoid", description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="command", required=True)
+    r = sub.add_parser("run", help="run one scenario, write metrics.json, trajectories.csv and plots")
+    r.add_argument("scenario", type=pathlib.Path)
+    r.add_argument("--seed", type=int, default=None, help="seed for SUMO and the plug-in (default: the scenario's)")
+    r.add_argument("--controller", default=None, help="controller name (default: the scenario's)")
+    r.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scenario value by its dotted path, e.g. --set sim.duration_s=60")
+    r.add_argument("--out", type=pathlib.Path, default=None, help="output folder (default: reports/runs/NAME-...)")
+    r.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
+    r.add_argument("--quiet", action="store_true", help="no progress bar")
+    sub.add_parser("controllers", help="list the controllers")
+    sub.add_parser("keys", help="print every scenario key (Markdown table)")
+    return ap
+
+
+def _summary(m: dict, out: pathlib.Path) -> str:
+    def f(x, fmt="{:.3f}"):
+        return "n/a" if x is None else fmt.format(x)
+
+    return "\n".join([
+        f"scenario {m['scenario']}  controller {m['controller']}  seed {m['seed']}  sim {m['sim_time_s']:.1f} s",
+        f"  goal_reached    {m['goal_reached']}   time_to_goal_s {f(m['time_to_goal_s'], '{:.1f}')}",
+        f"  collisions      {m['collisions']}   (SUMO reported {m['sumo_collisions']})",
+        f"  min_gap_m       {f(m['min_gap_m'], '{:.2f}')}",
+        f"  phi_coll        {f(m['phi_coll'], '{:.3g}')}   phi_wall {f(m['phi_wall'], '{:.3f}')} m",
+        f"  mean_speed_mps  {f(m['mean_speed_mps'], '{:.2f}')}   path_length_m {f(m['path_length_m'], '{:.1f}')}",
+        f"  -> {out}",
+    ])
+
+
+def cmd_run(args) -> int:
+    from . import evaluate, runner, scenario
+
+    scn = scenario.load(args.scenario, args.overrides, controller=args.controller, seed=args.seed)
+    out = args.out
+    if out is None:
+        stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
+        out = pathlib.Path("reports") / "runs" / f"{scn.name}-{scn.spec.ego.controller}-s{scn.spec.sim.seed}-{stamp}"
+    out.mkdir(parents=True, exist_ok=True)
+    res = runner.run(scn, log_file=out / "sumo.log", progress=not args.quiet and sys.stdout.isatty())
+    m = evaluate.write_outputs(res, out, plots=scn.spec.output.plots and not args.no_plots)
+    print(_summary(m, out))
+    return 0
+
+
+def main(argv=None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        if args.command == "run":
+            return cmd_run(args)
+        if args.command == "controllers":
+            from .controllers import REGISTRY
+
+            for name, (cls, _) in sorted(REGISTRY.items()):
+                print(f"{name:10s} {(cls.__doc__ or '').strip().splitlines()[0] if cls.__doc__ else ''}")
+            return 0
+        if args.command == "keys":
+            from .scenario import format_reference
+
+            print(format_reference())
+            return 0
+    except ScenarioError as e:
+        print(f"sumo-avoid: error: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,135 @@
+"""Validation of nested plain data (from TOML) into frozen dataclasses.
+
+Every error names the file, the dotted key and what was expected, and is raised as
+:class:`ScenarioError`; the CLI prints it as one line and exits with code 2.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import types
+import typing
+from typing import Any
+
+
+class ScenarioError(ValueError):
+    """A scenario (or an override) is malformed. ``str(err)`` is the one-line message."""
+
+    def __init__(self, file: str, key: str, expected: str, got: Any = None, *, show_got: bool = True):
+        self.file, self.key, self.expected = file, key, expected
+        got_txt = f", got {got!r}" if show_got else ""
+        super().__init__(f"{file}: key '{key}': expected {expected}{got_txt}")
+
+
+def field_doc(default=dataclasses.MISSING, *, doc: str = "", signed: bool = False, **kw):
+    """A dataclass field with a docstring (units!) and whether negative values are allowed."""
+    return dataclasses.field(default=default, metadata={"doc": doc, "signed": signed}, **kw)
+
+
+def _type_name(tp) -> str:
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, types.UnionType):
+        return " or ".join(_type_name(a) for a in typing.get_args(tp))
+    if origin in (tuple, list):
+        return f"a list of {_type_name(typing.get_args(tp)[0])}"
+    return {float: "a number", int: "an integer", str: "a string", bool: "true/false",
+            type(None): "nothing"}.get(tp, getattr(tp, "__name__", str(tp)))
+
+
+def _coerce(value, tp, file: str, key: str, signed: bool):
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, types.UnionType):
+        args = typing.get_args(tp)
+        if value is None and type(None) in args:
+            return None
+        errors = []
+        for a in args:
+            if a is type(None):
+                continue
+            try:
+                return _coerce(value, a, file, key, signed)
+            except ScenarioError as e:
+                errors.append(e)
+        raise ScenarioError(file, key, _type_name(tp), value)
+    if origin in (tuple, list):
+        if not isinstance(value, (list, tuple)):
+            raise ScenarioError(file, key, _type_name(tp), value)
+        (item_tp, *rest) = typing.get_args(tp)
+        return tuple(_coerce(v, item_tp, file, f"{key}[{i}]", signed) for i, v in enumerate(value))
+    if tp is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ScenarioError(file, key, "a number", value)
+        value = float(value)
+        if not math.isfinite(value):
+            raise ScenarioError(file, key, "a finite number", value)
+        if value < 0 and not signed:
+            raise ScenarioError(file, key, "a non-negative number", value)
+        return value
+    if tp is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ScenarioError(file, key, "an integer", value)
+        if value < 0 and not signed:
+            raise ScenarioError(file, key, "a non-negative integer", value)
+        return value
+    if tp is bool:
+        if not isinstance(value, bool):
+            raise ScenarioError(file, key, "true or false", value)
+        return value
+    if tp is str:
+        if not isinstance(value, str):
+            raise ScenarioError(file, key, "a string", value)
+        return value
+    if dataclasses.is_dataclass(tp):
+        return build(tp, value, file, key)
+    if tp is dict or typing.get_origin(tp) is dict:
+        if not isinstance(value, dict):
+            raise ScenarioError(file, key, "a table", value)
+        return value
+    raise TypeError(f"unsupported field type {tp!r}")  # programming error, not user input
+
+
+def build(cls, data, file: str, prefix: str = ""):
+    """Build the frozen dataclass ``cls`` from ``data`` (a dict), validating every key."""
+    where = prefix or "<top level>"
+    if not isinstance(data, dict):
+        raise ScenarioError(file, where, "a table", data)
+    hints = typing.get_type_hints(cls)
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    unknown = sorted(set(data) - set(fields))
+    if unknown:
+        key = f"{prefix}.{unknown[0]}" if prefix else unknown[0]
+        raise ScenarioError(file, key, f"one of the known keys {sorted(fields)}", unknown[0], show_got=False)
+    kwargs = {}
+    for name, f in fields.items():
+        key = f"{prefix}.{name}" if prefix else name
+        if name in data:
+            kwargs[name] = _coerce(data[name], hints[name], file, key, f.metadata.get("signed", False))
+        elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+            raise ScenarioError(file, key, f"a value ({_type_name(hints[name])}); the key is required",
+                                show_got=False)
+    try:
+        return cls(**kwargs)
+    except ScenarioError:
+        raise
+    except ValueError as e:  # cross-field checks in __post_init__
+        raise ScenarioError(file, where, str(e), show_got=False) from None
+
+
+def describe(cls, prefix: str = "") -> list[tuple[str, str, str, str]]:
+    """(key, type, default, doc) rows for documentation of a config dataclass."""
+    rows = []
+    hints = typing.get_type_hints(cls)
+    for f in dataclasses.fields(cls):
+        key = f"{prefix}.{f.name}" if prefix else f.name
+        tp = hints[f.name]
+        if dataclasses.is_dataclass(tp):
+            rows += describe(tp, key)
+            continue
+        if f.default is not dataclasses.MISSING:
+            default = repr(f.default)
+        elif f.default_factory is not dataclasses.MISSING:
+            default = repr(f.default_factory())
+        else:
+            default = "(required)"
+        rows.append((key, _type_name(tp), default, f.metadata.get("doc", "")))
+    return rows

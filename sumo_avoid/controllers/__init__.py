@@ -1,0 +1,18 @@
+"""Controllers by name: ``REGISTRY[name] = (ControllerClass, ParamsDataclass)``.
+
+Every controller takes ``(params, road, rng)`` and follows :class:`.base.Controller`.
+"""
+from .apf import ApfController, ApfParams
+from .apf_sa import ApfSaController, ApfSaParams
+from .scripted import ScriptedController, ScriptedParams
+
+REGISTRY = {
+    "apf": (ApfController, ApfParams),
+    "apf_sa": (ApfSaController, ApfSaParams),
+    "scripted": (ScriptedController, ScriptedParams),
+}
+
+
+def make_controller(name: str, params, road, rng):
+    cls, _ = REGISTRY[name]
+    return cls(params, road, rng)

@@ -1,0 +1,47 @@
+"""The controller protocol and what a controller is given.
+
+A controller is built once per run from its frozen parameter dataclass, is told about each ego
+when the plug-in takes it over (:class:`EgoTask`), and each step maps an :class:`Observation` to a
+desired 2-D velocity per ego (m/s). It never talks to SUMO.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+from ..snapshot import Snapshot
+
+
+@dataclass(frozen=True)
+class EgoTask:
+    vid: str
+    goal: np.ndarray  # (2,) m
+    path: np.ndarray  # (P, 2) reference polyline along the ego's route, m
+    cruise_speed_mps: float
+
+
+@dataclass(frozen=True)
+class Observation:
+    """What the sensor hands the controllers at one step (ground truth: the whole snapshot)."""
+
+    snapshot: Snapshot
+    ego_ids: tuple[str, ...]  # egos to control, in the order of the returned velocities
+    obstacles: tuple = field(default=())  # static obstacle polygons, each (k, 2) m
+
+    @property
+    def ego_rows(self) -> np.ndarray:
+        return np.array([self.snapshot.index[v] for v in self.ego_ids], dtype=int)
+
+
+class Controller(Protocol):
+    def add_ego(self, task: EgoTask) -> None: ...
+
+    def remove_ego(self, vid: str) -> None: ...
+
+    def act(self, obs: Observation) -> np.ndarray:  # (E, 2) desired velocity, m/s
+        ...
+
+    def stats(self) -> dict:  # counters for metrics.json (e.g. SA escapes)
+        ...

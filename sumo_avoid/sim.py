@@ -1,0 +1,159 @@
+"""The one module that talks to libsumo.
+
+:class:`SumoSim` starts SUMO for a scenario, reads the world once per step into an immutable
+:class:`~sumo_avoid.snapshot.Snapshot` (through subscriptions, not per-vehicle getters), applies
+the actuator's poses to the egos with ``moveToXY`` and advances the simulation.
+
+SUMO runs with a fixed seed, ``--collision.check-junctions``, collisions reported but not acted on
+(``--collision.action warn``, ``--collision.mingap-factor 0`` = physical contact only), no
+teleporting, and the sublane model. Egos run with SUMO's safety checks off (speed mode 32,
+lane-change mode 0), so a controller's mistakes are not hidden; other vehicles keep SUMO's models.
+"""
+from __future__ import annotations
+
+import math
+import pathlib
+from dataclasses import dataclass
+
+import libsumo
+import numpy as np
+
+from .snapshot import Snapshot
+
+_DYNAMIC = (libsumo.constants.VAR_POSITION, libsumo.constants.VAR_ANGLE, libsumo.constants.VAR_SPEED)
+_SIM_VARS = (libsumo.constants.VAR_DEPARTED_VEHICLES_IDS, libsumo.constants.VAR_ARRIVED_VEHICLES_IDS)
+EGO_SPEED_MODE = 32  # all of SUMO's speed safety checks off (verified: a commanded crash happens)
+EGO_LANE_CHANGE_MODE = 0  # SUMO changes no lanes for the ego: the plug-in is in charge
+
+
+@dataclass(frozen=True)
+class SumoCollision:
+    time_s: float
+    collider: str
+    victim: str
+    kind: str
+    lane: str
+
+
+@dataclass(frozen=True)
+class EgoInfo:
+    """What the plug-in learns about an ego when it takes it over."""
+
+    vid: str
+    route_edges: tuple[str, ...]
+    lane_index: int
+
+
+def sumo_args(net: pathlib.Path, routes, additional, step_s: float, seed: int, lateral_resolution_m: float,
+              log_file: pathlib.Path | None) -> list[str]:
+    args = ["sumo", "-n", str(net), "--step-length", repr(step_s), "--seed", str(seed),
+            "--collision.action", "warn", "--collision.check-junctions", "true",
+            "--collision.mingap-factor", "0", "--lateral-resolution", repr(lateral_resolution_m),
+            "--time-to-teleport", "-1", "--no-step-log", "true", "--duration-log.disable", "true"]
+    if routes:
+        args += ["-r", ",".join(str(r) for r in routes)]
+    if additional:
+        args += ["-a", ",".join(str(a) for a in additional)]
+    if log_file is not None:
+        args += ["--log", str(log_file)]
+    else:
+        args += ["--no-warnings", "true"]
+    return args
+
+
+class SumoSim:
+    """One running SUMO (libsumo allows one per process: parallel runs need processes)."""
+
+    def __init__(self, args: list[str]):
+        if libsumo.isLoaded():
+            raise RuntimeError("a libsumo simulation is already running in this process")
+        libsumo.start(args)
+        self.step_s = libsumo.simulation.getDeltaT()
+        libsumo.simulation.subscribe(list(_SIM_VARS))
+        self._dims: dict[str, tuple[float, float]] = {}  # id -> (length, width), static
+        self._egos: set[str] = set()
+        self._subscribe_new(libsumo.vehicle.getIDList())
+
+    # --- reading ---------------------------------------------------------------------------
+    def _subscribe_new(self, ids) -> None:
+        for vid in ids:
+            if vid not in self._dims:
+                libsumo.vehicle.subscribe(vid, list(_DYNAMIC))
+                self._dims[vid] = (libsumo.vehicle.getLength(vid), libsumo.vehicle.getWidth(vid))
+
+    def read(self) -> Snapshot:
+        """The world now, as an immutable snapshot (centres, math headings)."""
+        res = libsumo.vehicle.getAllSubscriptionResults()
+        ids = tuple(res)
+        n = len(ids)
+        if n == 0:
+            return Snapshot.empty(self.time_s)
+        c = libsumo.constants
+        front = np.array([res[v][c.VAR_POSITION] for v in ids], dtype=float)
+        heading = np.radians(90.0 - np.array([res[v][c.VAR_ANGLE] for v in ids], dtype=float))
+        speed = np.array([res[v][c.VAR_SPEED] for v in ids], dtype=float)
+        dims = np.array([self._dims[v] for v in ids], dtype=float)
+        direction = np.column_stack([np.cos(heading), np.sin(heading)])
+        centre = front - direction * (dims[:, :1] / 2.0)
+        is_ego = np.array([v in self._egos for v in ids], dtype=bool)
+        return Snapshot(self.time_s, ids, centre, direction * speed[:, None], heading,
+                        dims[:, 0], dims[:, 1], is_ego)
+
+    @property
+    def time_s(self) -> float:
+        return libsumo.simulation.getTime()
+
+    def departed(self) -> tuple[str, ...]:
+        return tuple(libsumo.simulation.getSubscriptionResults()[libsumo.constants.VAR_DEPARTED_VEHICLES_IDS])
+
+    def pending(self) -> int:
+        """Vehicles loaded but not yet in the network, plus those in it."""
+        return libsumo.simulation.getMinExpectedNumber()
+
+    # --- egos ------------------------------------------------------------------------------
+    def take_over(self, vid: str) -> EgoInfo:
+        libsumo.vehicle.setSpeedMode(vid, EGO_SPEED_MODE)
+        libsumo.vehicle.setLaneChangeMode(vid, EGO_LANE_CHANGE_MODE)
+        self._egos.add(vid)
+        return EgoInfo(vid, tuple(libsumo.vehicle.getRoute(vid)), libsumo.vehicle.getLaneIndex(vid))
+
+    def apply(self, ids, centre: np.ndarray, heading: np.ndarray, speed: np.ndarray) -> None:
+        """Place each ego exactly (off-lane allowed, also inside junctions): moveToXY keepRoute=2."""
+        for k, vid in enumerate(ids):
+            length = self._dims[vid][0]
+            h = float(heading[k])
+            fx = float(centre[k, 0]) + 0.5 * length * math.cos(h)
+            fy = float(centre[k, 1]) + 0.5 * length * math.sin(h)
+            libsumo.vehicle.moveToXY(vid, "", -1, fx, fy, angle=90.0 - math.degrees(h), keepRoute=2)
+            libsumo.vehicle.setPreviousSpeed(vid, float(speed[k]))
+
+    def release(self, vid: str) -> None:
+        """Take a finished ego out of the simulation."""
+        if vid in self._egos:
+            self._egos.discard(vid)
+        if vid in self._dims and vid in libsumo.vehicle.getIDList():
+            libsumo.vehicle.remove(vid)
+
+    # --- stepping --------------------------------------------------------------------------
+    def step(self) -> list[SumoCollision]:
+        libsumo.simulationStep()
+        arrived = libsumo.simulation.getSubscriptionResults()[libsumo.constants.VAR_ARRIVED_VEHICLES_IDS]
+        for vid in arrived:
+            self._dims.pop(vid, None)
+            self._egos.discard(vid)
+        self._subscribe_new(self.departed())
+        t = self.time_s
+        return [SumoCollision(t, c.collider, c.victim, c.type, c.lane) for c in libsumo.simulation.getCollisions()]
+
+    def add_polygon(self, pid: str, shape: np.ndarray, color=(60, 60, 60, 255)) -> None:
+        libsumo.polygon.add(pid, [tuple(map(float, p)) for p in shape], color, fill=True, layer=5)
+
+    def close(self) -> None:
+        if libsumo.isLoaded():
+            libsumo.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
