@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import field_doc
-from ..geometry import footprint_corners
+from ..geometry import footprint_corners, point_segment_distance
 from ..road import polyline_point_at, polyline_project
 from .apf import ApfController, ApfParams, _unit
 from .base import EgoTask, Observation
@@ -45,6 +45,7 @@ class ApfSaParams(ApfParams):
     sa_escape_m: float = field_doc(3.0, doc="the walk has left the minimum this far from the trap, m")
     escape_hold_s: float = field_doc(3.0, doc="keep the escape offset this long once reached, s")
     escape_timeout_s: float = field_doc(10.0, doc="give up an escape after this long, s")
+    escape_margin_m: float = field_doc(0.5, doc="the escape target keeps the car this far from road edges, m")
 
 
 @dataclass
@@ -114,12 +115,31 @@ class ApfSaController(ApfController):
                     st.cooldown_until_s = t + p.trap_window_s
                 else:
                     self.escapes += 1
-                    st.escape_offset = self._lateral(task, end)
+                    st.escape_offset = self._inside_offset(task, q, speed, self._lateral(task, end),
+                                                           float(snap.width[row]))
                     st.escape_start_s, st.held_since_s = t, None
                     target = self.carrot(task, q, speed, st.escape_offset)
                     fld = self.field(obs, row, q[None, :], target)
             out[k] = self.velocity(fld, task.cruise_speed_mps)
         return out
+
+    def _inside_offset(self, task: EgoTask, q, speed: float, offset: float, width: float) -> float:
+        """Shrink a lateral offset until the shifted carrot lies on the road with
+        ``escape_margin_m`` to spare on each side of the car (a target on the kerb is no target)."""
+        need = 0.5 * width + self.p.escape_margin_m
+        for k in range(int(abs(offset) / 0.25) + 1):
+            o = math.copysign(max(abs(offset) - 0.25 * k, 0.0), offset)
+            c = self.carrot(task, q, speed, o)
+            if self.road.outside_distance(c[None, :])[0] == 0.0 and self._clearance(c) >= need:
+                return o
+        return 0.0
+
+    def _clearance(self, point) -> float:
+        segs = self.road.segments_near(point, 10.0)
+        if not len(segs):
+            return math.inf
+        d, _ = point_segment_distance(np.asarray(point)[None, :], segs[:, 0], segs[:, 1])
+        return float(d.min())
 
     def _update_escape(self, task: EgoTask, st: _EgoState, q, t: float) -> None:
         p = self.p
