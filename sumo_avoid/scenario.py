@@ -13,6 +13,8 @@ import sys
 from dataclasses import dataclass, field, replace
 
 from .config import ScenarioError, build, describe, field_doc
+from .safety import DangerTimeParams
+from .sensors.radar import RadarParams
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -39,17 +41,17 @@ class SimConfig:
 
 @dataclass(frozen=True)
 class EgoConfig:
-    ids: tuple[str, ...] = field_doc(doc="ids of vehicles in the route files that the plug-in drives")
+    ids: tuple[str, ...] = field_doc((), doc="ids of vehicles in the route files that the plug-in drives "
+                                             "(may be empty when an [arena] spawns the egos)")
     controller: str = field_doc("apf_sa", doc="controller name (see `sumo-avoid controllers`)")
-    sensor: str = field_doc("truth", doc="what controllers see: 'truth' (ground truth)")
+    sensor: str = field_doc("truth", doc="what controllers see: 'truth' (ground truth) or 'radar' ([radar] table)")
+    safety: str = field_doc("none", doc="safety layer over the controller: 'none' or 'danger_time' ([safety] table)")
     cruise_speed_mps: float = field_doc(20.0, doc="desired cruising speed, m/s")
     goal: tuple[float, ...] | None = field_doc(None, signed=True,
                                                doc="goal [x, y] in net coordinates, m; default: end of each ego's route")
     goal_tolerance_m: float = field_doc(5.0, doc="the goal is reached when an ego centre comes this close, m")
 
     def __post_init__(self):
-        if not self.ids:
-            raise ValueError("at least one ego id in ego.ids")
         if self.goal is not None and len(self.goal) != 2:
             raise ValueError("ego.goal = [x, y]")
 
@@ -61,7 +63,50 @@ class ActuatorConfig:
     max_lat_accel_mps2: float = field_doc(4.0, doc="largest lateral acceleration v*yaw_rate, m/s^2")
     max_yaw_rate_radps: float = field_doc(0.8, doc="largest yaw rate, rad/s")
     min_turn_radius_m: float = field_doc(5.5, doc="smallest turning radius (yaw rate <= v/R), m")
-    max_reverse_speed_mps: float = field_doc(0.0, doc="reverse gear speed limit, m/s (0 = no reversing)")
+    max_reverse_speed_mps: float = field_doc(2.0, doc="reverse gear speed limit, m/s (0 = no reversing)")
+    mode: str = field_doc("kinematic", doc="'kinematic' (car: accel/yaw limits) or 'relaxation' (flocking "
+                                           "reference: dv/dt = (v_des - v)/tau, |dv/dt| <= relax_max_accel)")
+    tau_s: float = field_doc(1.0, doc="relaxation mode: velocity time constant tau, s")
+    relax_max_accel_mps2: float = field_doc(6.0, doc="relaxation mode: acceleration cap, m/s^2")
+
+    def __post_init__(self):
+        if self.mode not in ("kinematic", "relaxation"):
+            raise ValueError("actuator.mode must be 'kinematic' or 'relaxation'")
+        if self.tau_s <= 0:
+            raise ValueError("actuator.tau_s > 0")
+
+
+@dataclass(frozen=True)
+class ArenaConfig:
+    size_m: float = field_doc(250.0, doc="side of the square arena (virtual walls), m")
+    origin: tuple[float, ...] = field_doc((0.0, 0.0), signed=True, doc="lower-left corner [x, y] of the arena, m")
+    n_agents: int = field_doc(100, doc="number of flocking vehicles spawned at random inside the arena")
+    min_spacing_m: float = field_doc(6.0, doc="smallest distance between two start positions, m")
+    margin_m: float = field_doc(5.0, doc="start positions keep this far from walls and obstacles, m")
+    initial_speed_mps: float = field_doc(0.0, doc="initial speed (random heading), m/s")
+    length_m: float = field_doc(4.0, doc="vehicle length, m")
+    width_m: float = field_doc(1.8, doc="vehicle width, m")
+    id_prefix: str = field_doc("f", doc="vehicle ids are PREFIX0 .. PREFIX(N-1)")
+
+    def __post_init__(self):
+        if len(self.origin) != 2:
+            raise ValueError("arena.origin = [x, y]")
+        if self.size_m <= 0 or self.n_agents < 1:
+            raise ValueError("arena.size_m > 0 and arena.n_agents >= 1")
+
+    @property
+    def ids(self) -> tuple[str, ...]:
+        return tuple(f"{self.id_prefix}{k}" for k in range(self.n_agents))
+
+
+@dataclass(frozen=True)
+class ObstacleConfig:
+    id: str = field_doc(doc="obstacle id (also its SUMO polygon id)")
+    shape: tuple[tuple[float, ...], ...] = field_doc(signed=True, doc="convex polygon [[x, y], ...] in net coordinates, m")
+
+    def __post_init__(self):
+        if len(self.shape) < 3 or any(len(p) != 2 for p in self.shape):
+            raise ValueError(f"obstacle {self.id}: shape needs >= 3 points [x, y]")
 
 
 @dataclass(frozen=True)
@@ -79,6 +124,14 @@ class ScenarioSpec:
     actuator: ActuatorConfig = field_doc(ActuatorConfig(), doc="[actuator] table")
     output: OutputConfig = field_doc(OutputConfig(), doc="[output] table")
     controllers: dict = field_doc(default_factory=dict, doc="[controllers.NAME] tables: parameters of controller NAME")
+    radar: RadarParams = field_doc(RadarParams(), doc="[radar] table (docs/radar.md)")
+    safety: DangerTimeParams = field_doc(DangerTimeParams(), doc="[safety] table: danger-time levels (docs/radar.md)")
+    arena: ArenaConfig | None = field_doc(None, doc="[arena] table: spawn a flock in a square arena (flocking)")
+    obstacles: tuple[ObstacleConfig, ...] = field_doc((), doc="[[obstacles]] static convex polygons (id, shape)")
+
+    def __post_init__(self):
+        if not self.ego.ids and self.arena is None:
+            raise ValueError("at least one ego id in ego.ids (or an [arena] table)")
 
 
 @dataclass(frozen=True)
@@ -158,8 +211,10 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     spec = build(ScenarioSpec, data, file)
     if spec.ego.controller not in REGISTRY:
         raise ScenarioError(file, "ego.controller", f"one of {sorted(REGISTRY)}", spec.ego.controller)
-    if spec.ego.sensor not in ("truth",):
-        raise ScenarioError(file, "ego.sensor", "one of ['truth']", spec.ego.sensor)
+    if spec.ego.sensor not in ("truth", "radar"):
+        raise ScenarioError(file, "ego.sensor", "one of ['radar', 'truth']", spec.ego.sensor)
+    if spec.ego.safety not in ("none", "danger_time"):
+        raise ScenarioError(file, "ego.safety", "one of ['danger_time', 'none']", spec.ego.safety)
     params = {}
     for name, (_, params_cls) in REGISTRY.items():
         params[name] = build(params_cls, spec.controllers.get(name, {}), file, f"controllers.{name}")

@@ -4,11 +4,13 @@ Every controller takes ``(params, road, rng)`` and follows :class:`.base.Control
 """
 from .apf import ApfController, ApfParams
 from .apf_sa import ApfSaController, ApfSaParams
+from .flocking import FlockingController, FlockingParams
 from .scripted import ScriptedController, ScriptedParams
 
 REGISTRY = {
     "apf": (ApfController, ApfParams),
     "apf_sa": (ApfSaController, ApfSaParams),
+    "flocking": (FlockingController, FlockingParams),
     "scripted": (ScriptedController, ScriptedParams),
 }
 

@@ -28,6 +28,7 @@ import numpy as np
 from ..config import field_doc
 from ..geometry import convex_distance, footprint_corners, point_segment_distance
 from ..road import polyline_point_at, polyline_project
+from ..sensors.perception import obstacle_vehicles
 from .base import EgoTask, Observation
 
 
@@ -41,6 +42,8 @@ class ApfParams:
     rho0_headway_s: float = field_doc(0.8, doc="time headway added to the influence distance ahead, s")
     k_edge: float = field_doc(2.0, doc="road-edge and solid-line repulsion gain, m^3/s")
     rho0_edge_m: float = field_doc(0.8, doc="road-edge and solid-line influence distance, m")
+    edge_lat_decel_mps2: float = field_doc(2.0, doc="lateral deceleration for the edge influence distance, m/s^2")
+    edge_reaction_s: float = field_doc(0.5, doc="reaction time added to the edge influence distance, s")
     lookahead_min_m: float = field_doc(15.0, doc="smallest carrot distance along the route, m")
     lookahead_time_s: float = field_doc(1.5, doc="carrot distance per unit speed, s")
     sense_radius_m: float = field_doc(100.0, doc="obstacles farther than this are ignored, m")
@@ -131,27 +134,26 @@ class ApfController:
         ego_corners = footprint_corners(q_cand, np.full(C, h), np.full(C, L), np.full(C, W))  # (C,4,2)
 
         # other vehicles within the sensing radius
-        d_all = np.hypot(*(snap.pos - q_cand[0]).T)
-        others = np.flatnonzero((d_all < p.sense_radius_m) & (np.arange(snap.n) != row))
+        o_pos, o_hd, o_len, o_wid, o_vel = obstacle_vehicles(obs, row, q_cand[0], p.sense_radius_m)
         v_safe = np.inf
-        if len(others):
-            oc = footprint_corners(snap.pos[others], snap.heading[others], snap.length[others], snap.width[others])
-            O = len(others)
+        if len(o_pos):
+            oc = footprint_corners(o_pos, o_hd, o_len, o_wid)
+            O = len(o_pos)
             P = np.repeat(ego_corners, O, axis=0)
             Q = np.tile(oc, (C, 1, 1))
             rho, p_ego, p_obs = convex_distance(P, Q)
-            centre_dir, _ = _unit(np.repeat(q_cand, O, axis=0) - np.tile(snap.pos[others], (C, 1)))
+            centre_dir, _ = _unit(np.repeat(q_cand, O, axis=0) - np.tile(o_pos, (C, 1)))
             away, n = _unit(p_ego - p_obs)
             away = np.where((n > 1e-6)[:, None], away, centre_dir)
             towards = -away
             cos_phi = np.maximum(towards @ hd, 0.0)
-            v_rel = v_ego[None, :] - np.tile(snap.vel[others], (C, 1))
+            v_rel = v_ego[None, :] - np.tile(o_vel, (C, 1))
             closing = np.maximum(np.einsum("ij,ij->i", v_rel, towards), 0.0)
             rho0 = p.rho0_min_m + cos_phi * (closing**2 / (2 * p.rho0_decel_mps2) + p.rho0_headway_s * np.hypot(*v_ego))
             Ur, Fr = repulsion(rho, away, rho0, p.k_rep)
             U = U + Ur.reshape(C, O).sum(axis=1)
             F = F + Fr.reshape(C, O, 2).sum(axis=1)
-            v_safe = self._governor(q_cand[0], hd, L, W, oc, snap.vel[others])
+            v_safe = self._governor(q_cand[0], hd, L, W, oc, o_vel)
 
         segs = self.road.segments_near(q_cand[0], p.rho0_edge_m + 0.5 * np.hypot(L, W) + 5.0)
         if len(segs):
@@ -161,7 +163,11 @@ class ApfController:
             rho, _, _ = convex_distance(P, Q)
             _, closest = point_segment_distance(q_cand, segs[:, 0], segs[:, 1])  # (C,S,2)
             away, _ = _unit(q_cand[:, None, :] - closest)
-            Ur, Fr = repulsion(rho, away.reshape(-1, 2), np.full(C * S, p.rho0_edge_m), p.k_edge, rho_floor=0.05)
+            away = away.reshape(-1, 2)
+            # a car drifting towards the kerb feels it earlier: closing speed -> stopping distance
+            closing = np.maximum(-(away @ v_ego), 0.0)
+            rho0 = p.rho0_edge_m + closing**2 / (2.0 * p.edge_lat_decel_mps2) + p.edge_reaction_s * closing
+            Ur, Fr = repulsion(rho, away, rho0, p.k_edge, rho_floor=0.05)
             U = U + Ur.reshape(C, S).sum(axis=1)
             F = F + Fr.reshape(C, S, 2).sum(axis=1)
         return Field(U, F, float(v_safe))

@@ -39,12 +39,15 @@ class ApfSaParams(ApfParams):
     trap_progress_frac: float = field_doc(0.7, doc="trapped below this fraction of cruise progress")
     trap_force_frac: float = field_doc(0.05, doc="|F| below this fraction of F_att_max = a minimum")
     sa_step_m: float = field_doc(1.0, doc="SA step length, m")
-    sa_t0: float = field_doc(2.0, doc="SA initial temperature (potential units)")
-    sa_cooling: float = field_doc(0.99, doc="SA cooling factor per draw (geometric schedule)")
+    sa_t0: float = field_doc(10.0, doc="SA initial temperature (potential units)")
+    sa_cooling: float = field_doc(0.995, doc="SA cooling factor per draw (geometric schedule)")
     sa_max_iter: int = field_doc(1000, doc="SA draws per escape search (seed: 1000)")
     sa_escape_m: float = field_doc(3.0, doc="the walk has left the minimum this far from the trap, m")
+    sa_free_ahead_m: float = field_doc(20.0, doc="the walk has left the basin where this much is free ahead along the route, m")
     escape_hold_s: float = field_doc(3.0, doc="keep the escape offset this long once reached, s")
     escape_timeout_s: float = field_doc(10.0, doc="give up an escape after this long, s")
+    escape_room_m: float = field_doc(12.0, doc="when blocked, back up until this much room is free ahead, m")
+    escape_reverse_speed_mps: float = field_doc(1.5, doc="speed while backing up, m/s")
     escape_margin_m: float = field_doc(0.5, doc="the escape target keeps the car this far from road edges, m")
 
 
@@ -55,6 +58,7 @@ class _EgoState:
     escape_start_s: float = 0.0
     held_since_s: float | None = None
     cooldown_until_s: float = -math.inf
+    reversing: bool = False
 
 
 class ApfSaController(ApfController):
@@ -121,6 +125,8 @@ class ApfSaController(ApfController):
                     target = self.carrot(task, q, speed, st.escape_offset)
                     fld = self.field(obs, row, q[None, :], target)
             out[k] = self.velocity(fld, task.cruise_speed_mps)
+            if st.escape_offset is not None:
+                out[k] = self._make_room(st, obs, row, out[k], fld.v_safe)
         return out
 
     def _inside_offset(self, task: EgoTask, q, speed: float, offset: float, width: float) -> float:
@@ -141,13 +147,48 @@ class ApfSaController(ApfController):
         d, _ = point_segment_distance(np.asarray(point)[None, :], segs[:, 0], segs[:, 1])
         return float(d.min())
 
+    def _make_room(self, st: _EgoState, obs: Observation, row: int, v_des, v_safe: float):
+        """A car cannot step sideways: when the escape is blocked straight ahead (the governor allows
+        no speed) it backs up along its heading until ``escape_room_m`` is free ahead, then drives
+        the escape forward. Needs ``actuator.max_reverse_speed_mps > 0``."""
+        snap = obs.snapshot
+        h = snap.heading[row]
+        fwd = np.array([math.cos(h), math.sin(h)])
+        if not st.reversing and v_safe < 0.5 and float(np.hypot(*snap.vel[row])) < 0.3:
+            st.reversing = True
+        if st.reversing:
+            room = self._room_ahead(obs, row)
+            if room >= self.p.escape_room_m:
+                st.reversing = False
+                return v_des
+            return -self.p.escape_reverse_speed_mps * fwd
+        return v_des
+
+    def _room_ahead(self, obs: Observation, row: int, at=None, heading=None) -> float:
+        """Free length ahead of the ego's footprint (placed at ``at`` with ``heading``), m."""
+        snap = obs.snapshot
+        others = np.flatnonzero(np.arange(snap.n) != row)
+        if not len(others):
+            return math.inf
+        h = snap.heading[row] if heading is None else heading
+        pos = snap.pos[row] if at is None else at
+        hd = np.array([math.cos(h), math.sin(h)])
+        oc = footprint_corners(snap.pos[others], snap.heading[others], snap.length[others], snap.width[others])
+        rel = oc - pos
+        x, y = rel @ hd, rel @ np.array([-hd[1], hd[0]])
+        half = 0.5 * snap.width[row] + self.p.gov_margin_m
+        ahead = (y.max(axis=1) >= -half) & (y.min(axis=1) <= half) & (x.max(axis=1) > 0)
+        if not ahead.any():
+            return math.inf
+        return float(max(x[ahead].min(), 0.0) - 0.5 * snap.length[row])
+
     def _update_escape(self, task: EgoTask, st: _EgoState, q, t: float) -> None:
         p = self.p
         if abs(self._lateral(task, q) - st.escape_offset) < 1.0:
             st.held_since_s = t if st.held_since_s is None else st.held_since_s
         if (t - st.escape_start_s >= p.escape_timeout_s
                 or (st.held_since_s is not None and t - st.held_since_s >= p.escape_hold_s)):
-            st.escape_offset, st.held_since_s = None, None
+            st.escape_offset, st.held_since_s, st.reversing = None, None, False
             st.history.clear()
             st.cooldown_until_s = t + p.trap_window_s
 
@@ -169,6 +210,14 @@ class ApfSaController(ApfController):
             if delta <= 0.0 or math.exp(-delta / max(T, 1e-12)) > rng.uniform():
                 x, Ux = x1, U1
             T *= p.sa_cooling
-            if Ux < U0 and np.hypot(*(x - x0)) >= p.sa_escape_m:
+            if Ux < U0 and np.hypot(*(x - x0)) >= p.sa_escape_m and self._leaves_basin(obs, row, x):
                 return x
         return None
+
+    def _leaves_basin(self, obs: Observation, row: int, x) -> bool:
+        """Has the walk left the trap's basin? A footprint at x, aligned with the route, must have
+        ``sa_free_ahead_m`` free in front of it (so the point is not just the next pocket)."""
+        task = self.tasks[obs.ego_ids[list(obs.ego_rows).index(row)]]
+        s = polyline_project(task.path, x)
+        t, _ = _unit(polyline_point_at(task.path, s + 1.0) - polyline_point_at(task.path, s))
+        return self._room_ahead(obs, row, at=np.asarray(x, float), heading=math.atan2(t[1], t[0])) >= self.p.sa_free_ahead_m
