@@ -53,7 +53,10 @@ def actuate(pos, heading, speed, v_des, limits: ActuatorConfig, dt_s: float) -> 
         -np.minimum(s_des * np.abs(np.cos(err)), limits.max_reverse_speed_mps),
         s_des * np.maximum(np.cos(err), 0.0),
     )
-    new_speed = np.clip(target, speed - limits.max_decel_mps2 * dt_s, speed + limits.max_accel_mps2 * dt_s)
+    # growing |speed| (either gear) is limited by max_accel, shrinking it by max_decel
+    speeding_up = (np.abs(target) > np.abs(speed)) & (target * speed >= 0)
+    lim = np.where(speeding_up, limits.max_accel_mps2, limits.max_decel_mps2) * dt_s
+    new_speed = speed + np.clip(target - speed, -lim, lim)
     # never jump from forward to reverse (or back) within one step: stop first
     new_speed = np.where((speed > 0) & (new_speed < 0), 0.0, new_speed)
     new_speed = np.where((speed < 0) & (new_speed > 0), 0.0, new_speed)

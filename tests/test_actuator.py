@@ -1,0 +1,59 @@
+"""The kinematic car, pinned to hand-computed values."""
+import math
+
+import numpy as np
+import pytest
+
+from sumo_avoid.actuator import actuate, wrap_angle
+from sumo_avoid.scenario import ActuatorConfig
+
+LIM = ActuatorConfig(max_accel_mps2=2.0, max_decel_mps2=5.0, max_lat_accel_mps2=4.0, max_yaw_rate_radps=0.5,
+                     min_turn_radius_m=5.0, max_reverse_speed_mps=2.0)
+
+
+def test_acceleration_and_braking_are_capped():
+    # wants 20 m/s from 10 m/s: +2 m/s^2 * 0.1 s = 10.2 m/s; moves 0.1 * 10.2 = 1.02 m along +x
+    m = actuate([[0, 0]], [0.0], [10.0], [[20.0, 0.0]], LIM, 0.1)
+    assert m.speed[0] == pytest.approx(10.2)
+    assert m.pos[0] == pytest.approx([1.02, 0.0])
+    # wants 0 from 10: -5 * 0.1 -> 9.5 m/s
+    m = actuate([[0, 0]], [0.0], [10.0], [[0.0, 0.0]], LIM, 0.1)
+    assert m.speed[0] == pytest.approx(9.5)
+    assert m.heading[0] == 0.0
+
+
+def test_yaw_rate_limited_by_lateral_acceleration():
+    # at 10 m/s (target 10 * cos 90deg = 0 -> brakes to 9.5; mean speed 9.75):
+    # yaw <= min(0.5, 4/9.75 = 0.41026, 9.75/5 = 1.95) = 0.41026 rad/s -> 0.041026 rad in 0.1 s
+    m = actuate([[0, 0]], [0.0], [10.0], [[0.0, 10.0]], LIM, 0.1)
+    assert m.heading[0] == pytest.approx(0.1 * 4.0 / 9.75)
+    assert m.speed[0] == pytest.approx(9.5)
+
+
+def test_no_turning_on_the_spot():
+    # stopped, desired velocity 90 deg to the left: forward target 5 cos 90deg = 0, yaw <= v/R = 0
+    m = actuate([[0, 0]], [0.0], [0.0], [[0.0, 5.0]], ActuatorConfig(max_reverse_speed_mps=0.0), 0.1)
+    assert m.heading[0] == 0.0 and m.speed[0] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_reverses_when_stopped_and_target_behind():
+    # stopped, desired velocity straight back (180 deg off): reverse at min(|v| |cos|, 2) = 2 m/s,
+    # but acceleration caps it at -2 m/s^2 * 0.1 s = -0.2 m/s; moves -0.02 m
+    m = actuate([[0, 0]], [0.0], [0.0], [[-5.0, 0.0]], LIM, 0.1)
+    assert m.speed[0] == pytest.approx(-0.2)
+    assert m.pos[0] == pytest.approx([-0.02, 0.0])
+
+
+def test_no_direct_switch_forward_to_reverse():
+    m = actuate([[0, 0]], [0.0], [0.1], [[-5.0, 0.0]], LIM, 0.1)
+    assert m.speed[0] == 0.0
+
+
+def test_wrap_angle():
+    assert wrap_angle(3 * math.pi / 2) == pytest.approx(-math.pi / 2)
+    assert wrap_angle(-3 * math.pi / 2) == pytest.approx(math.pi / 2)
+
+
+def test_vectorised_over_egos():
+    m = actuate(np.zeros((3, 2)), np.zeros(3), np.full(3, 5.0), [[5, 0], [10, 0], [0, 0]], LIM, 0.1)
+    assert m.speed == pytest.approx([5.0, 5.2, 4.5])
