@@ -8,9 +8,11 @@ from __future__ import annotations
 import argparse
 import datetime
 import pathlib
+import shutil
 import sys
 
 from .config import ScenarioError
+from .sim import SumoStartError
 
 EXIT_BAD_INPUT = 2
 
@@ -29,6 +31,10 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     sub.add_parser("controllers", help="list the controllers")
     sub.add_parser("keys", help="print every scenario key (Markdown table)")
+    from . import batch, report, reproduce, suite  # light imports: heavy modules load inside the commands
+
+    for mod in (batch, suite, report, reproduce):
+        mod.add_parser(sub)
     return ap
 
 
@@ -55,8 +61,14 @@ def cmd_run(args) -> int:
     if out is None:
         stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
         out = pathlib.Path("reports") / "runs" / f"{scn.name}-{scn.spec.ego.controller}-s{scn.spec.sim.seed}-{stamp}"
+    created = not out.exists()
     out.mkdir(parents=True, exist_ok=True)
-    res = runner.run(scn, log_file=out / "sumo.log", progress=not args.quiet and sys.stdout.isatty())
+    try:
+        res = runner.run(scn, log_file=out / "sumo.log", progress=not args.quiet and sys.stdout.isatty())
+    except SumoStartError as e:  # the run never started: leave nothing behind
+        if created:
+            shutil.rmtree(out, ignore_errors=True)
+        raise ScenarioError(str(scn.path), "sim", "files SUMO can load", show_got=False) from e
     m = evaluate.write_outputs(res, out, plots=scn.spec.output.plots and not args.no_plots)
     print(_summary(m, out))
     return 0
@@ -67,6 +79,8 @@ def main(argv=None) -> int:
     try:
         if args.command == "run":
             return cmd_run(args)
+        if getattr(args, "func", None) is not None:  # batch, suite, report
+            return args.func(args)
         if args.command == "controllers":
             from .controllers import REGISTRY
 
@@ -79,7 +93,8 @@ def main(argv=None) -> int:
             print(format_reference())
             return 0
     except ScenarioError as e:
-        print(f"sumo-avoid: error: {e}", file=sys.stderr)
+        cause = f" (SUMO: {e.__cause__})" if e.__cause__ is not None else ""
+        print(f"sumo-avoid: error: {e}{cause}", file=sys.stderr)
         return EXIT_BAD_INPUT
     return 1
 

@@ -45,9 +45,13 @@ class EgoInfo:
 
 
 def sumo_args(net: pathlib.Path, routes, additional, step_s: float, seed: int, lateral_resolution_m: float,
-              log_file: pathlib.Path | None) -> list[str]:
+              log_file: pathlib.Path | None, sumo_collisions: bool = True) -> list[str]:
+    """SUMO's command line. ``sumo_collisions=False`` turns SUMO's own (lane-based) collision check
+    off: for a flock moved off-lane anywhere in an arena it reports tens of thousands of spurious
+    contacts per run (measured); the plug-in's footprint check is the reference there."""
     args = ["sumo", "-n", str(net), "--step-length", repr(step_s), "--seed", str(seed),
-            "--collision.action", "warn", "--collision.check-junctions", "true",
+            "--collision.action", "warn" if sumo_collisions else "none",
+            "--collision.check-junctions", "true" if sumo_collisions else "false",
             "--collision.mingap-factor", "0", "--lateral-resolution", repr(lateral_resolution_m),
             "--time-to-teleport", "-1", "--no-step-log", "true", "--duration-log.disable", "true"]
     if routes:
@@ -61,13 +65,22 @@ def sumo_args(net: pathlib.Path, routes, additional, step_s: float, seed: int, l
     return args
 
 
+class SumoStartError(RuntimeError):
+    """SUMO refused to load the network, routes or additional files."""
+
+
 class SumoSim:
     """One running SUMO (libsumo allows one per process: parallel runs need processes)."""
 
     def __init__(self, args: list[str]):
         if libsumo.isLoaded():
             raise RuntimeError("a libsumo simulation is already running in this process")
-        libsumo.start(args)
+        try:
+            libsumo.start(args)
+        except Exception as e:  # libsumo raises TraCIException / FatalTraCIError on bad input
+            if libsumo.isLoaded():
+                libsumo.close()
+            raise SumoStartError(" ".join(str(e).split())) from None
         self.step_s = libsumo.simulation.getDeltaT()
         libsumo.simulation.subscribe(list(_SIM_VARS))
         self._dims: dict[str, tuple[float, float]] = {}  # id -> (length, width), static
@@ -84,7 +97,7 @@ class SumoSim:
     def read(self) -> Snapshot:
         """The world now, as an immutable snapshot (centres, math headings)."""
         res = libsumo.vehicle.getAllSubscriptionResults()
-        ids = tuple(res)
+        ids = tuple(v for v in res if v in self._dims)  # libsumo keeps a previous run's results until a step
         n = len(ids)
         if n == 0:
             return Snapshot.empty(self.time_s)
@@ -144,6 +157,29 @@ class SumoSim:
         self._subscribe_new(self.departed())
         t = self.time_s
         return [SumoCollision(t, c.collider, c.victim, c.type, c.lane) for c in libsumo.simulation.getCollisions()]
+
+    def add_free_vehicles(self, ids, centre: np.ndarray, heading: np.ndarray, speed: float,
+                          length_m: float, width_m: float, type_id: str = "flock") -> None:
+        """Add vehicles placed at exact centres/headings, off-lane (the arena's flock). They are
+        inserted by SUMO at the next step and then reported by :meth:`departed` like route vehicles."""
+        if type_id not in libsumo.vehicletype.getIDList():
+            libsumo.vehicletype.copy("DEFAULT_VEHTYPE", type_id)
+            libsumo.vehicletype.setLength(type_id, float(length_m))
+            libsumo.vehicletype.setWidth(type_id, float(width_m))
+            libsumo.vehicletype.setMaxSpeed(type_id, 50.0)
+            libsumo.vehicletype.setMinGap(type_id, 0.0)
+        edge = next(e for e in libsumo.edge.getIDList() if not e.startswith(":"))
+        route_id = f"__{type_id}_route"
+        if route_id not in libsumo.route.getIDList():
+            libsumo.route.add(route_id, [edge])
+        for k, vid in enumerate(ids):
+            libsumo.vehicle.add(vid, route_id, typeID=type_id, depart="now", departSpeed=repr(float(speed)))
+            libsumo.vehicle.setSpeedMode(vid, EGO_SPEED_MODE)
+            libsumo.vehicle.setLaneChangeMode(vid, EGO_LANE_CHANGE_MODE)
+            h = float(heading[k])
+            fx = float(centre[k, 0]) + 0.5 * length_m * math.cos(h)
+            fy = float(centre[k, 1]) + 0.5 * length_m * math.sin(h)
+            libsumo.vehicle.moveToXY(vid, "", -1, fx, fy, angle=90.0 - math.degrees(h), keepRoute=2)
 
     def add_polygon(self, pid: str, shape: np.ndarray, color=(60, 60, 60, 255)) -> None:
         libsumo.polygon.add(pid, [tuple(map(float, p)) for p in shape], color, fill=True, layer=5)

@@ -77,3 +77,18 @@ def test_run_writes_outputs(tmp_path):
     assert (out / "trajectories.csv").stat().st_size > 0
     assert "collisions" in r.stdout
     assert not any(k.endswith(("wall_s", "_clock", "elapsed_s")) or k in ("loop_s", "total_s") for k in m)
+
+
+def test_route_file_sumo_cannot_load(tmp_path):
+    routes = SCENARIOS / f"_tmp_{tmp_path.name}.rou.xml"
+    routes.write_text('<routes>\n  <vehicle id="ego" route="nope" depart="0"/>\n</routes>\n')
+    path = write(tmp_path, GOOD.replace("overtaking.rou.xml", routes.name), "sumo_bad.toml")
+    out = tmp_path / "out"
+    try:
+        r = cli("run", path, "--out", out)
+    finally:
+        path.unlink()
+        routes.unlink()
+    assert r.returncode == 2
+    assert len(r.stderr.strip().splitlines()) == 1 and "'sim'" in r.stderr and "nope" in r.stderr
+    assert not out.exists()

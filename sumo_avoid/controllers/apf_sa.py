@@ -86,7 +86,8 @@ class ApfSaController(ApfController):
         a = polyline_point_at(task.path, s)
         b = polyline_point_at(task.path, s + 1.0)
         t, _ = _unit(b - a)
-        return float(np.cross(t, np.asarray(q) - a))
+        d = np.asarray(q) - a
+        return float(t[0] * d[1] - t[1] * d[0])  # 2-D cross product: left of the path > 0
 
     def act(self, obs: Observation) -> np.ndarray:
         p = self.p
