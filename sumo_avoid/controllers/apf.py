@@ -122,12 +122,15 @@ class ApfController:
         return point
 
     # --- the field -------------------------------------------------------------------------
-    def field(self, obs: Observation, row: int, q_cand: np.ndarray, target: np.ndarray) -> Field:
-        """Potential, force and governor speed for the ego at ``row`` placed at ``q_cand`` (C,2)."""
+    def field(self, obs: Observation, row: int, q_cand: np.ndarray, target: np.ndarray,
+              heading: float | None = None) -> Field:
+        """Potential, force and governor speed for the ego at ``row`` placed at ``q_cand`` (C,2)
+        (with its own heading, or ``heading`` in rad)."""
         p, snap = self.p, obs.snapshot
         q_cand = np.atleast_2d(np.asarray(q_cand, float))
         C = len(q_cand)
-        h, L, W = snap.heading[row], snap.length[row], snap.width[row]
+        h = snap.heading[row] if heading is None else heading
+        L, W = snap.length[row], snap.width[row]
         v_ego = snap.vel[row]
         hd = np.array([np.cos(h), np.sin(h)])
         U, F = attraction(q_cand, target, p.k_att, p.d_att_m)

@@ -112,7 +112,8 @@ class ApfSaController(ApfController):
             window_full = st.history[-1][0] - st.history[0][0] >= p.trap_window_s - 1e-9
             progress = st.history[-1][1] - st.history[0][1]
             slow = progress < p.trap_progress_frac * task.cruise_speed_mps * p.trap_window_s
-            stuck_now = force < p.trap_force_frac * f_max or fld.v_safe < 0.9 * task.cruise_speed_mps
+            stuck_now = (force < p.trap_force_frac * f_max or fld.v_safe < 0.9 * task.cruise_speed_mps
+                         or speed < 0.5)
             if (st.escape_offset is None and window_full and slow and stuck_now and t >= st.cooldown_until_s):
                 end = self._anneal(obs, row, target, float(fld.U[0]))
                 if end is None:
@@ -127,7 +128,7 @@ class ApfSaController(ApfController):
                     fld = self.field(obs, row, q[None, :], target)
             out[k] = self.velocity(fld, task.cruise_speed_mps)
             if st.escape_offset is not None:
-                out[k] = self._make_room(st, obs, row, out[k], fld.v_safe)
+                out[k] = self._make_room(st, obs, row, out[k], fld.v_safe, target)
         return out
 
     def _inside_offset(self, task: EgoTask, q, speed: float, offset: float, width: float) -> float:
@@ -148,21 +149,28 @@ class ApfSaController(ApfController):
         d, _ = point_segment_distance(np.asarray(point)[None, :], segs[:, 0], segs[:, 1])
         return float(d.min())
 
-    def _make_room(self, st: _EgoState, obs: Observation, row: int, v_des, v_safe: float):
+    def _make_room(self, st: _EgoState, obs: Observation, row: int, v_des, v_safe: float, target):
         """A car cannot step sideways: when the escape is blocked straight ahead (the governor allows
-        no speed) it backs up along its heading until ``escape_room_m`` is free ahead, then drives
-        the escape forward. Needs ``actuator.max_reverse_speed_mps > 0``."""
+        no speed) it backs up along its heading until ``escape_room_m`` is free on the line towards
+        the escape target, then drives the escape forward. Needs ``actuator.max_reverse_speed_mps > 0``."""
         snap = obs.snapshot
         h = snap.heading[row]
         fwd = np.array([math.cos(h), math.sin(h)])
         if not st.reversing and v_safe < 0.5 and float(np.hypot(*snap.vel[row])) < 0.3:
             st.reversing = True
-        if st.reversing:
-            room = self._room_ahead(obs, row)
+        if st.reversing:  # back up until the straight line towards the escape target is free
+            aim = np.asarray(target) - snap.pos[row]
+            room = self._room_ahead(obs, row, heading=math.atan2(aim[1], aim[0]))
             if room >= self.p.escape_room_m:
                 st.reversing = False
                 return v_des
-            return -self.p.escape_reverse_speed_mps * fwd
+            # back up against the route direction, so the nose straightens while the lateral
+            # offset already won is kept (a three-point manoeuvre rather than undoing the turn)
+            task = self.tasks[obs.ego_ids[list(obs.ego_rows).index(row)]]
+            s = polyline_project(task.path, snap.pos[row])
+            tangent, _ = _unit(polyline_point_at(task.path, s + 1.0) - polyline_point_at(task.path, s))
+            back = -tangent if float(tangent @ fwd) > 0.0 else -fwd
+            return self.p.escape_reverse_speed_mps * back
         return v_des
 
     def _room_ahead(self, obs: Observation, row: int, at=None, heading=None) -> float:
@@ -197,8 +205,14 @@ class ApfSaController(ApfController):
         """Seed Fig. 2 on the frozen field; returns the escape point or None."""
         p, snap, rng = self.p, obs.snapshot, self.rng
         x0 = snap.pos[row].copy()
+        # candidate footprints are aligned with the route (where the car would end up driving),
+        # not with its momentary heading, which may point at the kerb after a manoeuvre
+        task = self.tasks[obs.ego_ids[list(obs.ego_rows).index(row)]]
+        s0 = polyline_project(task.path, x0)
+        t, _ = _unit(polyline_point_at(task.path, s0 + 1.0) - polyline_point_at(task.path, s0))
+        h, L, W = math.atan2(t[1], t[0]), snap.length[row], snap.width[row]
+        U0 = float(self.field(obs, row, x0[None, :], target, heading=h).U[0])
         x, Ux, T = x0.copy(), U0, p.sa_t0
-        h, L, W = snap.heading[row], snap.length[row], snap.width[row]
         for _ in range(p.sa_max_iter):
             a = rng.uniform(0.0, 2.0 * math.pi)
             x1 = x + p.sa_step_m * np.array([math.cos(a), math.sin(a)])
@@ -206,7 +220,7 @@ class ApfSaController(ApfController):
             if self.road.footprint_outside_distance(corners)[0] > 0.0:
                 T *= p.sa_cooling
                 continue
-            U1 = float(self.field(obs, row, x1[None, :], target).U[0])
+            U1 = float(self.field(obs, row, x1[None, :], target, heading=h).U[0])
             delta = U1 - Ux
             if delta <= 0.0 or math.exp(-delta / max(T, 1e-12)) > rng.uniform():
                 x, Ux = x1, U1
