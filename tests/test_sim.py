@@ -1,0 +1,54 @@
+"""The libsumo boundary on a real net: snapshot conversion (front bumper -> centre, compass ->
+math heading), immutability, and an ego placed exactly by moveToXY."""
+import math
+
+import numpy as np
+import pytest
+
+from conftest import ROOT, SCENARIOS
+from sumo_avoid.sim import SumoSim, sumo_args
+from sumo_avoid.snapshot import Snapshot
+
+
+def _start():
+    args = sumo_args(ROOT / "nets" / "overtaking.net.xml", [SCENARIOS / "crash_straight.rou.xml"], [], 0.1, 1, 0.8,
+                     None)
+    return SumoSim(args)
+
+
+def test_snapshot_centres_headings_and_sizes():
+    with _start() as sim:
+        sim.step()
+        snap = sim.read()
+        i, j = snap.index["ego"], snap.index["parked"]
+        # departPos is the front bumper: ego inserted with its front at x = 20 in the first step,
+        # centre 4.5/2 = 2.25 m behind; lane 1 centre at y = -8.75; heading east = 0 rad
+        assert snap.pos[i] == pytest.approx([20.0 - 2.25, -8.75])
+        assert snap.pos[j] == pytest.approx([80.0 - 2.25, -8.75])
+        assert snap.heading[i] == pytest.approx(0.0)
+        assert snap.length[i] == 4.5 and snap.width[i] == 1.8
+        assert snap.vel[i] == pytest.approx([10.0, 0.0])
+        assert not snap.is_ego.any()  # nobody taken over yet
+
+
+def test_snapshot_is_immutable():
+    snap = Snapshot(0.0, ("a",), [[1.0, 2.0]], [[0.0, 0.0]], [0.0], [4.5], [1.8], [True])
+    with pytest.raises(ValueError):
+        snap.pos[0, 0] = 5.0
+    with pytest.raises(AttributeError):
+        snap.time_s = 3.0
+
+
+def test_ego_is_placed_exactly_and_off_lane():
+    with _start() as sim:
+        sim.step()
+        sim.take_over("ego")
+        # centre 3 m left of the lane centre, heading 30 degrees: off the lane grid entirely
+        h = math.radians(30.0)
+        sim.apply(["ego"], np.array([[40.0, -5.75]]), np.array([h]), np.array([5.0]))
+        sim.step()
+        snap = sim.read()
+        i = snap.index["ego"]
+        assert snap.pos[i] == pytest.approx([40.0, -5.75], abs=1e-6)
+        assert snap.heading[i] == pytest.approx(h, abs=1e-9)
+        assert snap.is_ego[i]
