@@ -52,6 +52,8 @@ def compute(res: RunResult) -> dict:
     out = {
         "scenario": spec.name,
         "controller": spec.ego.controller,
+        "sensor": spec.ego.sensor,
+        "safety": spec.ego.safety,
         "seed": spec.sim.seed,
         "step_s": spec.sim.step_s,
         "sim_time_s": res.sim_time_s,
@@ -69,7 +71,23 @@ def compute(res: RunResult) -> dict:
         **res.controller_stats,
         **motion,
     }
+    if spec.ego.controller == "flocking":
+        out.update(flocking_compute(res, out["phi_coll"], out["phi_wall"]))
     return _clean(out)
+
+
+def flocking_compute(res: RunResult, phi_coll: float, road_phi_wall: float) -> dict:
+    """SPEC §1.1-1.2 order parameters, partial fitnesses and μ. In an arena φ_wall uses the vehicle
+    centres against the square and the obstacles; on a road it is the road footprint value."""
+    from .arena import outside_distance
+    from .order import flocking_metrics
+
+    p = res.scenario.params
+    phi_wall = road_phi_wall
+    if res.walls is not None:
+        ego = res.traj[res.traj["is_ego"]]
+        phi_wall = metrics.phi_wall(outside_distance(ego[["x", "y"]].to_numpy(), res.walls, res.obstacles))
+    return flocking_metrics(res.traj, v_flock=p.v_flock_mps, r_c_m=p.r_c_m, phi_coll=phi_coll, phi_wall=phi_wall)
 
 
 def series(res: RunResult) -> pd.DataFrame:
@@ -96,6 +114,10 @@ def write_outputs(res: RunResult, out_dir: pathlib.Path, plots: bool = True) -> 
     (out_dir / "metrics.json").write_text(json.dumps(m, indent=2, sort_keys=True) + "\n")
     (out_dir / "timings.json").write_text(json.dumps(_clean(res.timings), indent=2, sort_keys=True) + "\n")
     res.traj.to_csv(out_dir / "trajectories.csv", index=False)
+    if getattr(res, "radar_log", None):  # radar.log_detections = true
+        from .sensors.log import detections_table
+
+        detections_table(res.radar_log).to_csv(out_dir / "detections.csv", index=False)
     if plots:
         from .plotting import plot_timeseries, plot_trajectories
 
@@ -105,4 +127,8 @@ def write_outputs(res: RunResult, out_dir: pathlib.Path, plots: bool = True) -> 
         plot_trajectories(res.road, res.traj, out_dir / "trajectory.png", collisions=events, goals=res.goals,
                           title=title)
         plot_timeseries(series(res), out_dir / "timeseries.png", title=title)
+        if res.walls is not None or res.obstacles:  # flock in an arena / obstacles: walls and polygons drawn
+            from .reproduce import plot_arena
+
+            plot_arena(res, out_dir / "arena.png", f"{m['scenario']} · seed {m['seed']} · mu {m.get('mu', 0):.3f}")
     return m

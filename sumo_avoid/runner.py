@@ -6,17 +6,20 @@ afterwards (:mod:`sumo_avoid.evaluate`) and never feed back into the run.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
 
-from .actuator import actuate
+from .actuator import Motion, actuate
+from .arena import relaxation_step
 from .controllers import make_controller
 from .controllers.base import EgoTask, Observation
 from .recorder import Recorder
 from .road import Road
+from .safety import DangerTimeLayer
 from .scenario import Scenario
+from .sensors.radar import Radar
 from .sim import SumoSim, sumo_args
 
 
@@ -31,6 +34,9 @@ class RunResult:
     sim_time_s: float
     controller_stats: dict
     timings: dict = field(default_factory=dict)
+    walls: np.ndarray | None = None  # (k,2) arena square when the scenario has an [arena], else None
+    obstacles: tuple = ()  # static obstacle polygons, each (k,2) m
+    radar_log: list = field(default_factory=list)  # radar scans (sensors.radar.Detections) if radar.log_detections
 
 
 def _progress(done: float, total: float, t0: float) -> None:
@@ -40,6 +46,16 @@ def _progress(done: float, total: float, t0: float) -> None:
           end="", flush=True)
 
 
+def _with_velocities(snap, vel_state: dict):
+    """The snapshot with the egos' velocities replaced by the ones the relaxation actuator holds."""
+    vel = np.array(snap.vel)
+    known = [(snap.index[v], w) for v, w in vel_state.items() if v in snap.index]
+    if known:
+        rows, w = zip(*known)
+        vel[list(rows)] = np.array(w)
+    return replace(snap, vel=vel)
+
+
 def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
     spec = scn.spec
     t_start = time.perf_counter()
@@ -47,16 +63,41 @@ def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
     rng = np.random.default_rng(spec.sim.seed)
     controller = make_controller(spec.ego.controller, scn.params, road, rng)
     recorder = Recorder(spec.output.record_radius_m)
-    ego_ids = set(spec.ego.ids)
+    # radar (own random stream) when controllers use it or the danger-time layer needs it; the layer
+    # also runs as a monitor (counters only, velocities untouched) with sensor = "radar", safety = "none"
+    radar = layer = None
+    if spec.ego.sensor == "radar" or spec.ego.safety == "danger_time":
+        radar = Radar(spec.radar, np.random.default_rng([spec.sim.seed, 4]))
+        layer = DangerTimeLayer(spec.safety)
+    arena = spec.arena
+    ego_ids = set(spec.ego.ids) | (set(arena.ids) if arena is not None else set())
+    obstacles = tuple(np.asarray(o.shape, float) for o in spec.obstacles)
+    uses_goals = getattr(controller, "uses_goals", True)
+    relax_mode = spec.actuator.mode == "relaxation"
+    vel_state: dict[str, np.ndarray] = {}  # relaxation mode: ego id -> 2-D velocity, m/s
+    walls = None
     goals: dict[str, tuple[float, float]] = {}
     active: dict[str, float] = {}  # ego id -> signed speed held by the actuator, m/s
     finished: set[str] = set()
     args = sumo_args(scn.net_file, scn.route_files, scn.additional_files, spec.sim.step_s, spec.sim.seed,
-                     spec.sim.lateral_resolution_m, log_file)
+                     spec.sim.lateral_resolution_m, log_file, sumo_collisions=arena is None)
     t_loop = time.perf_counter()
     step = 0
     with SumoSim(args) as sim:
         dt = sim.step_s
+        for ob, shape in zip(spec.obstacles, obstacles):
+            sim.add_polygon(ob.id, shape)
+        if arena is not None:
+            from .arena import random_positions, square
+
+            walls = square(arena.origin, arena.size_m)
+            if hasattr(controller, "set_walls"):
+                controller.set_walls(walls)
+            spawn = np.random.default_rng([spec.sim.seed, 1])  # own stream: the controller's stays put
+            start = random_positions(spawn, arena.n_agents, walls, obstacles, min_spacing_m=arena.min_spacing_m,
+                                     margin_m=arena.margin_m)
+            heading0 = spawn.uniform(-np.pi, np.pi, arena.n_agents)
+            sim.add_free_vehicles(arena.ids, start, heading0, arena.initial_speed_mps, arena.length_m, arena.width_m)
         new = [v for v in sim.departed() if v in ego_ids]
         n_steps = int(round(spec.sim.duration_s / dt))
         for step in range(n_steps + 1):
@@ -64,18 +105,21 @@ def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
                 info = sim.take_over(vid)
                 path = road.route_path(list(info.route_edges), depart_lane=info.lane_index)
                 goal = np.asarray(spec.ego.goal if spec.ego.goal is not None else path[-1], float)
-                goals[vid] = (float(goal[0]), float(goal[1]))
+                if uses_goals:
+                    goals[vid] = (float(goal[0]), float(goal[1]))
                 controller.add_ego(EgoTask(vid, goal, path, spec.ego.cruise_speed_mps))
                 active[vid] = np.nan
             snap = sim.read()
+            if vel_state:  # SUMO's reported speed of an off-lane vehicle is unreliable: use the actuator's
+                snap = _with_velocities(snap, vel_state)
             recorder.record(step, snap)
             present = [v for v in active if v in snap.index]
             for vid in [v for v in active if v not in snap.index]:  # left the network on its own
                 active.pop(vid)
                 controller.remove_ego(vid)
                 finished.add(vid)
-            done = [v for v in present
-                    if np.hypot(*(snap.pos[snap.index[v]] - goals[v])) <= spec.ego.goal_tolerance_m]
+            done = [v for v in present if uses_goals
+                    and np.hypot(*(snap.pos[snap.index[v]] - goals[v])) <= spec.ego.goal_tolerance_m]
             for vid in done:
                 sim.release(vid)
                 controller.remove_ego(vid)
@@ -88,8 +132,21 @@ def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
                 rows = np.array([snap.index[v] for v in present])
                 speed = np.array([active[v] for v in present])
                 speed = np.where(np.isnan(speed), snap.speed[rows], speed)
-                v_des = controller.act(Observation(snap, tuple(present)))
-                motion = actuate(snap.pos[rows], snap.heading[rows], speed, v_des, spec.actuator, dt)
+                det = radar.scan(snap, present, obstacles) if radar is not None else None
+                v_des = controller.act(Observation(snap, tuple(present), obstacles,
+                                                   radar.objects(det) if spec.ego.sensor == "radar" else None))
+                if layer is not None:
+                    v_lim, _ = layer.apply(v_des, det, snap.width[rows], speed, dt)
+                    v_des = v_lim if spec.ego.safety == "danger_time" else v_des
+                if relax_mode:
+                    vel0 = np.array([vel_state[v] if v in vel_state else snap.vel[snap.index[v]] for v in present])
+                    pos1, vel1, head1, speed1 = relaxation_step(snap.pos[rows], vel0, snap.heading[rows], v_des,
+                                                                spec.actuator.tau_s,
+                                                                spec.actuator.relax_max_accel_mps2, dt)
+                    vel_state.update(zip(present, vel1))
+                    motion = Motion(pos1, head1, speed1)
+                else:
+                    motion = actuate(snap.pos[rows], snap.heading[rows], speed, v_des, spec.actuator, dt)
                 sim.apply(present, motion.pos, motion.heading, motion.speed)
                 for k, vid in enumerate(present):
                     active[vid] = float(motion.speed[k])
@@ -102,6 +159,8 @@ def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
         _progress(sim_time, spec.sim.duration_s, t_loop)
         print()
     t_end = time.perf_counter()
+    stats = {**controller.stats(), **(layer.stats() if layer is not None else {})}
     return RunResult(scn, recorder.table(), recorder.sumo_events(), goals, road, step, sim_time,
-                     controller.stats(), {"setup_s": t_loop - t_start, "loop_s": t_end - t_loop,
-                                          "total_s": t_end - t_start})
+                     stats, {"setup_s": t_loop - t_start, "loop_s": t_end - t_loop,
+                             "total_s": t_end - t_start}, walls, obstacles,
+                     radar.log if radar is not None else [])

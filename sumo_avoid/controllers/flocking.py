@@ -71,8 +71,10 @@ class FlockingParams:
     delay_s: float = field_doc(0.0, doc="neighbours' states arrive this late, s")
     pos_noise_m: float = field_doc(0.0, doc="std of Gaussian noise on sensed positions, m")
     vel_noise_mps: float = field_doc(0.0, doc="std of Gaussian noise on sensed velocities, m/s")
+    shill_normal_only: bool = field_doc(False, doc="road adaptation (not SPEC): the shill term sees only the velocity "
+                                                   "difference along the wall/obstacle normal (default off = eq. 8)")
     vehicles_as_obstacles: bool = field_doc(True, doc="non-ego vehicles are moving obstacles (shill term)")
-    kdtree_min_agents: int = field_doc(400, doc="use scipy cKDTree for neighbour pairs from this many egos on")
+    kdtree_min_agents: int = field_doc(100, doc="use scipy cKDTree for neighbour pairs from this many egos on")
 
     def __post_init__(self):
         if self.preset:
@@ -116,7 +118,7 @@ def neighbour_pairs(pos_i, pos_j, r_c, same=True, use_tree=False):
 
         m = cKDTree(pos_i).sparse_distance_matrix(cKDTree(pos_j), r_c, output_type="ndarray")
         i, j, r = m["i"].astype(np.int64), m["j"].astype(np.int64), m["v"]
-        if same:  # sparse_distance_matrix leaves out zero distances: keep coincident i != j too
+        if same:  # (sparse_distance_matrix leaves out exactly coincident pairs, r = 0: no direction anyway)
             keep = i != j
             i, j, r = i[keep], j[keep], r[keep]
         return i, j, r
@@ -157,6 +159,8 @@ def shill(vel, dist, normal, p: FlockingParams, v_obj=None):
     if v_obj is not None:
         v_s = v_s + v_obj
     dv = v_s - vel[:, None, :]
+    if p.shill_normal_only:  # road adaptation: only the velocity across the wall/obstacle face counts
+        dv = (dv * normal).sum(-1)[..., None] * normal
     u, v_is = _unit(dv)
     vmax = D(dist - p.r0_shill_m, p.a_shill_mps2, p.p_shill_ps)
     mag = np.where(v_is > vmax, v_is - vmax, 0.0)

@@ -1,0 +1,89 @@
+"""Time one flocking arena run (scenarios/arena_v4.toml: N = 100, 600 s) against the same vehicles
+stepped in plain SUMO without the plug-in's computation, in the same process run.
+
+    python benchmarks/arena.py [--agents N] [--duration S] [--skip-neighbours]
+
+``wall_s``: runner.run() (SUMO + snapshot + flocking controller + relaxation actuator + recorder);
+``plain_s``: the same N vehicles spawned the same way, each step read back and moved by moveToXY
+along their current velocity (no controller, no recorder); metric computation is timed apart.
+Also times the controller's neighbour search, dense distance matrix vs scipy cKDTree, by N.
+Last line: ``wall_s=X plain_s=Y ratio=Z``.
+"""
+from __future__ import annotations
+
+import argparse
+import pathlib
+import time
+
+import numpy as np
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+def plain(scn) -> float:
+    from sumo_avoid.arena import random_positions, square
+    from sumo_avoid.sim import SumoSim, sumo_args
+
+    spec, arena = scn.spec, scn.spec.arena
+    t0 = time.perf_counter()
+    args = sumo_args(scn.net_file, scn.route_files, scn.additional_files, spec.sim.step_s, spec.sim.seed,
+                     spec.sim.lateral_resolution_m, None, sumo_collisions=False)
+    with SumoSim(args) as sim:
+        rng = np.random.default_rng([spec.sim.seed, 1])
+        start = random_positions(rng, arena.n_agents, square(arena.origin, arena.size_m), (),
+                                 min_spacing_m=arena.min_spacing_m, margin_m=arena.margin_m)
+        heading = rng.uniform(-np.pi, np.pi, arena.n_agents)
+        sim.add_free_vehicles(arena.ids, start, heading, 4.0, arena.length_m, arena.width_m)
+        sim.step()
+        dt = sim.step_s
+        for _ in range(int(round(spec.sim.duration_s / dt))):
+            snap = sim.read()
+            sim.apply(snap.ids, snap.pos + snap.vel * dt, snap.heading, snap.speed)
+            sim.step()
+    return time.perf_counter() - t0
+
+
+def neighbours() -> None:
+    from sumo_avoid.controllers.flocking import neighbour_pairs
+
+    rng = np.random.default_rng(0)
+    print("neighbour pairs within 80 m, density 100 per 250 m square (ms per call):")
+    neighbour_pairs(np.zeros((2, 2)), np.zeros((2, 2)), 1.0, use_tree=True)  # warm-up (scipy import)
+    for n in (50, 100, 200, 400, 1000, 3000):
+        side = 250.0 * np.sqrt(n / 100)
+        pos = rng.uniform(0, side, (n, 2))
+        res = {}
+        for tree in (False, True):
+            reps = max(3, int(2000 / n))
+            t0 = time.perf_counter()
+            for _ in range(reps):
+                neighbour_pairs(pos, pos, 80.0, use_tree=tree)
+            res[tree] = 1e3 * (time.perf_counter() - t0) / reps
+        print(f"  N={n:5d}  dense {res[False]:8.2f}  cKDTree {res[True]:8.2f}")
+
+
+def main() -> None:
+    from sumo_avoid import evaluate, runner, scenario
+
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--agents", type=int, default=100)
+    ap.add_argument("--duration", type=float, default=600.0)
+    ap.add_argument("--skip-neighbours", action="store_true")
+    a = ap.parse_args()
+    if not a.skip_neighbours:
+        neighbours()
+    scn = scenario.load(ROOT / "scenarios" / "arena_v4.toml",
+                        [f"arena.n_agents={a.agents}", f"sim.duration_s={a.duration}"])
+    t0 = time.perf_counter()
+    res = runner.run(scn)
+    wall = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    m = evaluate.compute(res)
+    print(f"arena run: N={a.agents} {a.duration:.0f} s, {res.steps} steps; loop {res.timings['loop_s']:.2f} s; "
+          f"metrics {time.perf_counter() - t1:.2f} s; mu {m['mu']:.3f}")
+    p = plain(scn)
+    print(f"wall_s={wall:.2f} plain_s={p:.2f} ratio={wall / p:.2f}")
+
+
+if __name__ == "__main__":
+    main()

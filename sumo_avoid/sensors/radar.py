@@ -1,0 +1,285 @@
+"""A forward radar emulator (SPEC §4, seed 004 §1.1), vectorised over egos and targets.
+
+Each ego carries one radar at the centre of its front bumper, boresight along the ego's heading.
+Per scan it reports, for every target it can see, one return at the target's nearest visible
+point: its **range**, its **azimuth** (rad, CCW from the boresight) and the **radial speed** (the
+target's velocity relative to the ego projected on the line of sight, m/s; negative = closing).
+Targets are footprints (other vehicles' oriented rectangles and static obstacle polygons), not
+centres.
+
+Model, per ego and scan:
+
+1. *Candidates*: targets whose centre lies within ``max_range_m`` plus their half-diagonal.
+2. *Angular intervals*: every candidate's vertices are converted to azimuths; the candidate covers
+   [min, max] (clipped to the field of view). Targets straddling the rear (span > 180 degrees) or
+   containing the sensor are dropped (the field of view is forward, < 180 degrees).
+3. *Occlusion*: all vertex azimuths of all candidates (and the feet of the perpendiculars from
+   the sensor on their edges) cut the field of view into elementary sectors; within one sector the set of covering targets is fixed and, footprints being disjoint
+   and convex, so is their depth order. The target hit first by the sector's middle ray owns the
+   sector. A target is seen iff it owns a sector: fully hidden targets vanish, partly hidden ones
+   are measured on their visible part (its nearest point: exact, since within a sector the
+   owner's boundary is one straight piece whose distance is monotone in the azimuth).
+4. *Limits*: reported only if the true range <= ``max_range_m``.
+5. *Imperfections* (numpy Generator, seeded from the scenario seed): each seen target is detected
+   with probability ``detection_prob``; Gaussian noise on range, radial speed and azimuth; the
+   azimuth is quantised to ``angular_resolution_deg``; false alarms (Poisson, mean
+   ``false_alarm_rate`` per scan and ego) are stationary clutter uniform in range and azimuth.
+6. *Update period*: a new scan every ``update_period_s``; in between the last scan is held.
+7. *Memory* (controllers only, :mod:`.tracker`): returns that left the field of view are coasted
+   for ``memory_s`` so a car beside the ego is not forgotten the moment it leaves the beam.
+
+Not modelled: merging of targets closer than the angular resolution, multipath, multiple
+reflections per target, elevation. ``Detections.target`` (the true id) is for evaluation only.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..config import field_doc
+from ..geometry import footprint_corners
+
+_BIG = 1e18
+
+
+@dataclass(frozen=True)
+class RadarParams:
+    max_range_m: float = field_doc(100.0, doc="maximum range, m (seed 004: 100 m)")
+    fov_deg: float = field_doc(90.0, doc="full horizontal field of view, degrees (< 180)")
+    angular_resolution_deg: float = field_doc(1.0, doc="azimuth quantisation step, degrees (0 = none)")
+    update_period_s: float = field_doc(0.1, doc="time between scans, s (held in between)")
+    range_sigma_m: float = field_doc(0.1, doc="range noise standard deviation, m")
+    speed_sigma_mps: float = field_doc(0.1, doc="radial-speed noise standard deviation, m/s")
+    azimuth_sigma_deg: float = field_doc(0.0, doc="azimuth noise standard deviation, degrees")
+    detection_prob: float = field_doc(1.0, doc="probability that a visible target is reported in a scan")
+    false_alarm_rate: float = field_doc(0.0, doc="mean false alarms per scan and ego (Poisson)")
+    memory_s: float = field_doc(8.0, doc="controllers also get returns lost from view for this long, coasted (0 = off), s")
+    log_detections: bool = field_doc(False, doc="keep every scan's detections (detections.csv)")
+
+    def __post_init__(self):
+        if self.max_range_m <= 0:
+            raise ValueError("radar.max_range_m > 0")
+        if not 0 < self.fov_deg < 180:
+            raise ValueError("0 < radar.fov_deg < 180")
+        if self.angular_resolution_deg < 0 or self.update_period_s < 0:
+            raise ValueError("radar.angular_resolution_deg and radar.update_period_s >= 0")
+        if min(self.range_sigma_m, self.speed_sigma_mps, self.azimuth_sigma_deg, self.false_alarm_rate,
+               self.memory_s) < 0:
+            raise ValueError("radar noise sigmas and false_alarm_rate >= 0")
+        if not 0 <= self.detection_prob <= 1:
+            raise ValueError("0 <= radar.detection_prob <= 1")
+
+
+@dataclass(frozen=True)
+class Detections:
+    """One scan of all egos' radars: D detections, each row belongs to ego ``ego[i]``."""
+
+    time_s: float
+    ego_ids: tuple[str, ...]  # the egos scanned (index space of ``ego``)
+    sensor_pos: np.ndarray  # (E, 2) radar positions (front bumper centres), m
+    sensor_heading: np.ndarray  # (E,) boresight, rad CCW from +x
+    sensor_vel: np.ndarray  # (E, 2) ego velocities, m/s
+    ego: np.ndarray  # (D,) int index into ego_ids
+    range_m: np.ndarray  # (D,)
+    azimuth_rad: np.ndarray  # (D,) CCW from the boresight
+    radial_speed_mps: np.ndarray  # (D,) relative speed along the line of sight (< 0 closing)
+    target: tuple[str, ...] = field(default=())  # (D,) true target id, "" = false alarm. EVALUATION ONLY
+
+    @property
+    def n(self) -> int:
+        return len(self.range_m)
+
+    def points(self) -> np.ndarray:
+        """(D, 2) world positions of the detections, m."""
+        a = self.sensor_heading[self.ego] + self.azimuth_rad
+        return self.sensor_pos[self.ego] + self.range_m[:, None] * np.column_stack([np.cos(a), np.sin(a)])
+
+    def of(self, vid: str) -> np.ndarray:
+        """Indices of the detections of ego ``vid``."""
+        return np.flatnonzero(self.ego == self.ego_ids.index(vid)) if vid in self.ego_ids else np.zeros(0, int)
+
+
+def _pad_candidates(mask: np.ndarray):
+    """(E, N) bool -> (E, T) target indices and (E, T) validity, T = max candidates per ego."""
+    counts = mask.sum(axis=1)
+    T = int(counts.max()) if mask.size else 0
+    idx = np.zeros((mask.shape[0], T), dtype=int)
+    valid = np.arange(T)[None, :] < counts[:, None]
+    e, n = np.nonzero(mask)
+    idx[valid] = n  # np.nonzero is row-major, so each ego's candidates fill its row in order
+    return idx, valid
+
+
+def ray_depth(rel: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """Distance along rays from the origin to the boundary of convex polygons.
+
+    rel (..., K, 2) polygon vertices relative to the ray origin, angles (...) ray directions (rad,
+    world frame), broadcast together. Returns (...): distance to the first boundary crossing, inf
+    if the ray misses. E.g. rel (E,T,1,K,2) with angles (E,1,R) gives (E,T,R).
+    """
+    a = rel
+    b = np.roll(rel, -1, axis=-2)
+    dx, dy = np.cos(angles)[..., None], np.sin(angles)[..., None]
+    abx, aby = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
+    denom = dx * aby - dy * abx
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = (a[..., 0] * aby - a[..., 1] * abx) / denom
+        u = (a[..., 0] * dy - a[..., 1] * dx) / denom
+    hit = (np.abs(denom) > 1e-12) & (u >= -1e-9) & (u <= 1 + 1e-9) & (s >= 0)
+    return np.where(hit, s, np.inf).min(axis=-1)
+
+
+def _wrap(a):
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+class Radar:
+    """Scans every ego's surroundings; stateful only for the update period and the log."""
+
+    def __init__(self, params: RadarParams, rng: np.random.Generator):
+        self.p = params
+        self.rng = rng
+        self._last: Detections | None = None
+        self.log: list[Detections] = []
+        from .tracker import Tracker  # late: tracker imports Detections from here
+
+        self.tracker = Tracker(params.memory_s, params.fov_deg, params.max_range_m) if params.memory_s > 0 else None
+
+    def objects(self, det: Detections) -> Detections:
+        """What controllers get: the scan plus remembered returns now out of view (sensors.tracker)."""
+        return self.tracker.update(det) if self.tracker is not None else det
+
+    def scan(self, snap, ego_ids, obstacles=(), *, force: bool = False) -> Detections:
+        """Detections of the egos ``ego_ids`` in ``snap``; static ``obstacles`` are (k,2) polygons."""
+        ego_ids = tuple(ego_ids)
+        last = self._last
+        if (not force and last is not None and last.ego_ids == ego_ids
+                and snap.time_s - last.time_s < self.p.update_period_s - 1e-9):
+            return last
+        det = self.measure(snap, ego_ids, obstacles)
+        self._last = det
+        if self.p.log_detections:
+            self.log.append(det)
+        return det
+
+    # --- the physics -----------------------------------------------------------------------
+    def measure(self, snap, ego_ids, obstacles=()) -> Detections:
+        p = self.p
+        rows = np.array([snap.index[v] for v in ego_ids], dtype=int)
+        E = len(rows)
+        hd = snap.heading[rows]
+        fwd = np.column_stack([np.cos(hd), np.sin(hd)])
+        spos = snap.pos[rows] + 0.5 * snap.length[rows][:, None] * fwd
+        svel = snap.vel[rows]
+        # all targets: vehicles (4 corners) and static polygons (padded to K vertices)
+        corners = footprint_corners(snap.pos, snap.heading, snap.length, snap.width)
+        polys = [np.asarray(o, float).reshape(-1, 2) for o in obstacles]
+        K = max([4] + [len(o) for o in polys])
+        allc = [np.concatenate([corners, np.repeat(corners[:, -1:], K - 4, axis=1)], axis=1)]
+        allc += [np.concatenate([o, np.repeat(o[-1:], K - len(o), axis=0)])[None] for o in polys]
+        allc = np.concatenate(allc) if polys else allc[0]
+        ids = tuple(snap.ids) + tuple(f"obstacle{i}" for i in range(len(polys)))
+        vel = np.concatenate([snap.vel, np.zeros((len(polys), 2))]) if polys else snap.vel
+        centre = allc.mean(axis=1)
+        radius = np.sqrt(((allc - centre[:, None]) ** 2).sum(-1)).max(axis=1)
+        d = np.hypot(*(centre[None] - spos[:, None]).transpose(2, 0, 1))  # (E, N)
+        mask = d <= p.max_range_m + radius[None]
+        mask[np.arange(E), rows] = False  # not oneself
+        idx, valid = _pad_candidates(mask)
+        T = idx.shape[1]
+        empty = np.zeros(0)
+        out = dict(ego=np.zeros(0, int), range_m=empty, azimuth_rad=empty, radial_speed_mps=empty, target=())
+        if T:
+            out = self._visible(spos, hd, svel, allc[idx], vel[idx], valid, idx, ids)
+        det = Detections(snap.time_s, tuple(ego_ids), spos, hd, svel, **out)
+        return self._imperfect(det)
+
+    def _visible(self, spos, hd, svel, poly, tvel, valid, idx, ids) -> dict:
+        p = self.p
+        half = math.radians(p.fov_deg) / 2
+        E = len(spos)
+        rel = poly - spos[:, None, None, :]  # (E,T,K,2)
+        az = _wrap(np.arctan2(rel[..., 1], rel[..., 0]) - hd[:, None, None])  # (E,T,K)
+        lo, hi = az.min(axis=2), az.max(axis=2)
+        ok = valid & (hi - lo < np.pi) & (np.maximum(lo, -half) < np.minimum(hi, half))
+        # keep only candidates inside the field of view (re-pad: T shrinks to the largest count)
+        sel, ok = _pad_candidates(ok)
+        take = lambda a: np.take_along_axis(a, sel.reshape(sel.shape + (1,) * (a.ndim - 2)), axis=1)  # noqa: E731
+        rel, az, lo, hi, tvel, idx = take(rel), take(az), take(lo), take(hi), take(tvel), take(idx)
+        T = rel.shape[1]
+        if T == 0:
+            return dict(ego=np.zeros(0, int), range_m=np.zeros(0), azimuth_rad=np.zeros(0),
+                        radial_speed_mps=np.zeros(0), target=())
+        # occlusion: the covering set only changes at interval ends, so the FOV is cut at every
+        # usable candidate's [lo, hi]; the target hit first by a sector's middle ray owns the sector
+        # (disjoint convex footprints keep their depth order across a sector)
+        cuts = np.where(ok[:, :, None], np.clip(np.stack([lo, hi], axis=2), -half, half), half)
+        cuts = np.sort(np.concatenate([cuts.reshape(E, -1), np.full((E, 1), -half)], axis=1), axis=1)
+        a0, a1 = cuts[:, :-1], cuts[:, 1:]  # (E,S)
+        width = a1 - a0
+        dmid = ray_depth(rel[:, :, None], (0.5 * (a0 + a1) + hd[:, None])[:, None, :])  # (E,T,S)
+        dmid = np.where(ok[:, :, None], dmid, np.inf)
+        owner = dmid.argmin(axis=1)  # (E,S)
+        has = np.isfinite(np.take_along_axis(dmid, owner[:, None], axis=1)[:, 0]) & (width > 1e-9)
+        own = (owner[:, None, :] == np.arange(T)[None, :, None]) & has[:, None, :]  # (E,T,S)
+        seen = ok & own.any(axis=2)
+        # nearest visible point of each seen target: its distance along a straight piece of its
+        # boundary is monotone between its vertices and the feet of the perpendiculars from the
+        # sensor, so the minimum is at an end of an owned sector or at one of those special angles
+        ab = np.roll(rel, -1, axis=2) - rel
+        L2 = (ab**2).sum(-1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            tf = np.clip(np.where(L2 > 1e-12, -(rel * ab).sum(-1) / L2, 0.0), 0.0, 1.0)
+        foot = rel + tf[..., None] * ab
+        special = np.concatenate([az, _wrap(np.arctan2(foot[..., 1], foot[..., 0]) - hd[:, None, None])], axis=2)
+        inside = ((own[:, :, None, :] & (a0[:, None, None, :] <= special[..., None])
+                   & (special[..., None] <= a1[:, None, None, :])).any(axis=3))  # (E,T,2K)
+        d_sp = np.where(inside, ray_depth(rel[:, :, None], special + hd[:, None, None]), np.inf)
+        eps = np.minimum(1e-7, 0.25 * width)
+        ends = np.stack([a0 + eps, a1 - eps], axis=-1)  # (E,S,2), nudged onto the sector
+        opoly = np.take_along_axis(rel, owner[:, :, None, None], axis=1)  # (E,S,K,2)
+        dend = ray_depth(opoly[:, :, None], ends + hd[:, None, None])  # (E,S,2)
+        d_end = np.where(own[..., None], dend[:, None], np.inf).reshape(E, T, -1)  # (E,T,2S)
+        a_end = np.broadcast_to(np.stack([a0, a1], axis=-1)[:, None], (E, T) + a0.shape[1:] + (2,)).reshape(E, T, -1)
+        d_all = np.concatenate([d_end, d_sp], axis=2)
+        a_all = np.concatenate([a_end, special], axis=2)
+        best = d_all.argmin(axis=2)
+        rng_vis = np.take_along_axis(d_all, best[..., None], axis=2)[..., 0]
+        az_vis = np.take_along_axis(a_all, best[..., None], axis=2)[..., 0]
+        seen &= rng_vis <= p.max_range_m
+        e, t = np.nonzero(seen)
+        az_w = hd[e] + az_vis[e, t]
+        u = np.column_stack([np.cos(az_w), np.sin(az_w)])
+        vr = np.einsum("ij,ij->i", tvel[e, t] - svel[e], u)
+        return dict(ego=e, range_m=rng_vis[e, t], azimuth_rad=az_vis[e, t], radial_speed_mps=vr,
+                    target=tuple(ids[i] for i in idx[e, t]))
+
+    def _imperfect(self, det: Detections) -> Detections:
+        p, g = self.p, self.rng
+        D = det.n
+        keep = g.random(D) < p.detection_prob if p.detection_prob < 1 else np.ones(D, bool)
+        e, r, a, v = det.ego[keep], det.range_m[keep], det.azimuth_rad[keep], det.radial_speed_mps[keep]
+        tgt = tuple(t for t, k in zip(det.target, keep) if k)
+        r = r + g.normal(0.0, p.range_sigma_m, len(r)) if p.range_sigma_m else r
+        v = v + g.normal(0.0, p.speed_sigma_mps, len(v)) if p.speed_sigma_mps else v
+        a = a + g.normal(0.0, math.radians(p.azimuth_sigma_deg), len(a)) if p.azimuth_sigma_deg else a
+        if p.false_alarm_rate > 0:
+            E = len(det.ego_ids)
+            nfa = g.poisson(p.false_alarm_rate, E)
+            fe = np.repeat(np.arange(E), nfa)
+            half = math.radians(p.fov_deg) / 2
+            fr = g.uniform(0.0, p.max_range_m, len(fe))
+            fa = g.uniform(-half, half, len(fe))
+            # stationary clutter: seen closing at the ego's speed along the line of sight
+            sv = det.sensor_vel[fe]
+            fv = -(sv[:, 0] * np.cos(det.sensor_heading[fe] + fa) + sv[:, 1] * np.sin(det.sensor_heading[fe] + fa))
+            e, r, a, v = (np.concatenate(x) for x in ((e, fe), (r, fr), (a, fa), (v, fv)))
+            tgt = tgt + ("",) * len(fe)
+        if p.angular_resolution_deg > 0:
+            step = math.radians(p.angular_resolution_deg)
+            a = np.round(a / step) * step
+        r = np.clip(r, 0.0, None)
+        return Detections(det.time_s, det.ego_ids, det.sensor_pos, det.sensor_heading, det.sensor_vel,
+                          e.astype(int), r, a, v, tgt)

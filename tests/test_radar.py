@@ -1,0 +1,199 @@
+"""Radar emulator: geometry against hand-computed values, occlusion, limits and noise statistics."""
+import math
+
+import numpy as np
+import pytest
+
+from sumo_avoid.sensors.radar import Radar, RadarParams, ray_depth
+from sumo_avoid.snapshot import Snapshot
+
+EXACT = dict(range_sigma_m=0.0, speed_sigma_mps=0.0, angular_resolution_deg=0.0)
+
+
+def snap(rows, t=0.0):
+    """rows: (id, x, y, vx, vy, length, width); the first one is the ego, heading +x for all."""
+    ids = tuple(r[0] for r in rows)
+    a = np.array([r[1:] for r in rows], float)
+    return Snapshot(t, ids, a[:, 0:2], a[:, 2:4], np.zeros(len(rows)), a[:, 4], a[:, 5],
+                    [True] + [False] * (len(rows) - 1))
+
+
+def radar(**kw):
+    return Radar(RadarParams(**{**EXACT, **kw}), np.random.default_rng(7))
+
+
+# ego: centre (0,0), length 4 -> sensor at (2, 0)
+EGO = ("ego", 0.0, 0.0, 10.0, 0.0, 4.0, 1.8)
+
+
+def by_target(det):
+    return {t: i for i, t in enumerate(det.target)}
+
+
+def test_ray_depth_unit_square():
+    sq = np.array([[1.0, -1.0], [3.0, -1.0], [3.0, 1.0], [1.0, 1.0]])  # x in [1,3], y in [-1,1]
+    d = ray_depth(sq[None], np.array([0.0, math.atan2(1, 1), math.pi / 2, math.atan2(0.5, 1)]))
+    # straight ahead hits x=1 at 1; 45 deg hits the corner (1,1) at sqrt 2; 90 deg misses; (1,0.5)
+    np.testing.assert_allclose(d, [1.0, math.sqrt(2), np.inf, math.hypot(1, 0.5)], atol=1e-12)
+
+
+def test_range_azimuth_radial_speed_hand_computed():
+    # A: rear face at x = 20 -> range 18 straight ahead, relative speed 5 - 10 = -5 (closing)
+    # D: nearest corner (32, 5.1) seen from (2, 0): range hypot(30, 5.1), azimuth atan2(5.1, 30),
+    #    moving (0, -3): radial = ((0,-3) - (10,0)) . u
+    s = snap([EGO, ("A", 22.25, 0.0, 5.0, 0.0, 4.5, 1.8), ("D", 34.25, 6.0, 0.0, -3.0, 4.5, 1.8)])
+    det = radar().scan(s, ["ego"])
+    k = by_target(det)
+    assert det.range_m[k["A"]] == pytest.approx(18.0)
+    assert det.azimuth_rad[k["A"]] == pytest.approx(0.0, abs=1e-12)
+    assert det.radial_speed_mps[k["A"]] == pytest.approx(-5.0)
+    assert det.range_m[k["D"]] == pytest.approx(math.hypot(30.0, 5.1))
+    az = math.atan2(5.1, 30.0)  # the return is at the nearest point
+    assert det.azimuth_rad[k["D"]] == pytest.approx(az, abs=1e-6)
+    assert det.radial_speed_mps[k["D"]] == pytest.approx(-10 * math.cos(az) - 3 * math.sin(az))
+    np.testing.assert_allclose(det.points()[k["A"]], [20.0, 0.0], atol=1e-6)
+    np.testing.assert_allclose(det.points()[k["D"]], [32.0, 5.1], atol=1e-4)
+
+
+def test_target_behind_another_is_hidden_then_seen_when_uncovered():
+    lead = ("A", 22.25, 0.0, 0.0, 0.0, 4.5, 1.8)
+    hidden = ("B", 42.25, 0.0, 0.0, 0.0, 4.5, 1.8)
+    r = radar()
+    assert by_target(r.scan(snap([EGO, lead, hidden]), ["ego"])).keys() == {"A"}
+    moved = ("A", 22.25, 3.5, 0.0, 0.0, 4.5, 1.8)  # the lead changes lane
+    det = r.scan(snap([EGO, moved, hidden], t=0.1), ["ego"])
+    assert by_target(det).keys() == {"A", "B"}
+    assert det.range_m[by_target(det)["B"]] == pytest.approx(38.0)
+
+
+def test_partly_hidden_target_is_measured_on_its_visible_part():
+    # A hides azimuths up to atan(0.9/18); C spans y in [0.6, 2.4] at x >= 40 (rel. x >= 38):
+    # its nearest visible point is on its rear face where the shadow ends, y = 38 * 0.9/18 = 1.9
+    s = snap([EGO, ("A", 22.25, 0.0, 0.0, 0.0, 4.5, 1.8), ("C", 42.25, 1.5, 0.0, 0.0, 4.5, 1.8)])
+    det = radar().scan(s, ["ego"])
+    k = by_target(det)
+    assert set(k) == {"A", "C"}
+    assert det.range_m[k["C"]] == pytest.approx(math.hypot(38.0, 1.9), abs=1e-4)
+    assert det.azimuth_rad[k["C"]] == pytest.approx(math.atan2(0.9, 18.0), abs=1e-6)
+
+
+def test_nothing_beyond_max_range_or_outside_fov():
+    near = ("N", 2.0 + 90.0 + 2.25, 0.0, 0, 0, 4.5, 1.8)  # rear face at range 90
+    far = ("F", 2.0 + 101.0 + 2.25, 20.0, 0, 0, 4.5, 1.8)  # nearest point ~103 m away
+    inside = ("I", 2.0 + 20.0, 15.0, 0, 0, 1.0, 1.0)  # azimuth ~ 34 deg
+    outside = ("O", 2.0 + 10.0, 15.0, 0, 0, 1.0, 1.0)  # azimuth ~ 56 deg > 45
+    behind = ("B", -20.0, 0.0, 0, 0, 4.5, 1.8)
+    s = snap([EGO, near, far, inside, outside, behind])
+    det = radar(max_range_m=100.0, fov_deg=90.0).scan(s, ["ego"])
+    assert set(det.target) == {"N", "I"}
+    assert det.range_m.max() <= 100.0
+    assert np.abs(det.azimuth_rad).max() <= math.radians(45.0)
+
+
+def test_vectorised_over_egos_matches_one_at_a_time():
+    rows = [EGO, ("e2", 50.0, -3.5, 8.0, 0.0, 4.5, 1.8), ("A", 22.25, 0.0, 5.0, 0.0, 4.5, 1.8),
+            ("B", 70.0, -3.0, 2.0, 0.5, 12.0, 2.5), ("C", 30.0, -3.5, 0.0, 0.0, 4.5, 1.8)]
+    s = Snapshot(0.0, tuple(r[0] for r in rows), [r[1:3] for r in rows], [r[3:5] for r in rows],
+                 [0.0, 0.1, 0.0, 0.05, -0.02], [r[5] for r in rows], [r[6] for r in rows], [1, 1, 0, 0, 0])
+    both = radar().measure(s, ["ego", "e2"])
+    for k, vid in enumerate(["ego", "e2"]):
+        one = radar().measure(s, [vid])
+        sel = both.ego == k
+        assert tuple(np.array(both.target, object)[sel]) == one.target
+        np.testing.assert_allclose(both.range_m[sel], one.range_m)
+        np.testing.assert_allclose(both.radial_speed_mps[sel], one.radial_speed_mps)
+
+
+def test_static_obstacle_polygons_are_targets_and_occluders():
+    wall = np.array([[30.0, -5.0], [31.0, -5.0], [31.0, 5.0], [30.0, 5.0]])
+    s = snap([EGO, ("B", 52.25, 0.0, 0, 0, 4.5, 1.8)])
+    det = radar().scan(s, ["ego"], obstacles=(wall,))
+    assert det.target == ("obstacle0",)
+    assert det.range_m[0] == pytest.approx(28.0)
+
+
+def test_noise_statistics_match_sigma():
+    s = snap([EGO, ("A", 52.25, 0.0, 4.0, 0.0, 4.5, 1.8)])  # true range 48, radial -6
+    r = Radar(RadarParams(range_sigma_m=0.5, speed_sigma_mps=0.3, angular_resolution_deg=0.0),
+              np.random.default_rng(3))
+    n = 4000
+    rng_err = np.empty(n)
+    v_err = np.empty(n)
+    for i in range(n):
+        d = r.measure(s, ["ego"])
+        rng_err[i], v_err[i] = d.range_m[0] - 48.0, d.radial_speed_mps[0] + 6.0
+    for err, sigma in ((rng_err, 0.5), (v_err, 0.3)):
+        assert abs(err.mean()) < 3 * sigma / math.sqrt(n)
+        assert abs(err.std(ddof=1) / sigma - 1.0) < 0.10
+
+
+def test_detection_probability_and_false_alarms():
+    s = snap([EGO, ("A", 52.25, 0.0, 0, 0, 4.5, 1.8)])
+    p, lam, n = 0.7, 0.5, 4000
+    r = Radar(RadarParams(detection_prob=p, false_alarm_rate=lam, **EXACT), np.random.default_rng(5))
+    hits = fas = 0
+    for _ in range(n):
+        d = r.measure(s, ["ego"])
+        hits += d.target.count("A")
+        fas += d.target.count("")
+        assert (d.range_m <= 100.0).all() and (np.abs(d.azimuth_rad) <= math.radians(45)).all()
+    assert abs(hits / n - p) < 3 * math.sqrt(p * (1 - p) / n)
+    assert abs(fas / n - lam) < 3 * math.sqrt(lam / n)
+
+
+def test_update_period_holds_last_scan_and_seed_determinism():
+    s0 = snap([EGO, ("A", 22.25, 0.0, 0, 0, 4.5, 1.8)], t=0.0)
+    s1 = snap([EGO, ("A", 32.25, 0.0, 0, 0, 4.5, 1.8)], t=0.1)
+    r = Radar(RadarParams(update_period_s=0.2, **EXACT), np.random.default_rng(0))
+    first = r.scan(s0, ["ego"])
+    assert r.scan(s1, ["ego"]) is first  # 0.1 s later: held
+    assert r.scan(snap([EGO, ("A", 32.25, 0.0, 0, 0, 4.5, 1.8)], t=0.2), ["ego"]).range_m[0] == pytest.approx(28.0)
+    a = Radar(RadarParams(), np.random.default_rng(9)).measure(s0, ["ego"])
+    b = Radar(RadarParams(), np.random.default_rng(9)).measure(s0, ["ego"])
+    np.testing.assert_array_equal(a.range_m, b.range_m)
+
+
+def test_params_validation():
+    with pytest.raises(ValueError):
+        RadarParams(fov_deg=200.0)
+    with pytest.raises(ValueError):
+        RadarParams(detection_prob=1.5)
+
+
+def test_tracker_coasts_a_car_that_left_the_fov_and_drops_it_when_it_should_be_seen():
+    from sumo_avoid.sensors.perception import perceived_obstacles, velocity_estimate
+
+    r = Radar(RadarParams(memory_s=5.0, **EXACT), np.random.default_rng(0))
+    # a car 10 m ahead-left in the next lane, 2 m/s slower: seen; radial-speed velocity estimate
+    # along the heading recovers its 8 m/s exactly
+    s0 = snap([EGO, ("A", 14.25, 3.5, 8.0, 0.0, 4.5, 1.8)], t=0.0)
+    det = r.scan(s0, ["ego"])
+    np.testing.assert_allclose(velocity_estimate(det), [[8.0, 0.0]], atol=1e-9)
+    r.objects(det)
+    # 4 s later the ego (10 m/s) is beside it: out of the FOV, no return; the memory coasts it
+    s1 = snap([("ego", 45.0, 0.0, 10.0, 0.0, 4.0, 1.8), ("A", 46.25, 3.5, 8.0, 0.0, 4.5, 1.8)], t=4.0)
+    det1 = r.scan(s1, ["ego"])
+    assert det1.n == 0
+    obj = r.objects(det1)
+    assert obj.n == 1 and obj.target == ("",)
+    # the return (its rear-right corner (12, 2.6) at t = 0) coasted 4 s at 8 m/s: (44, 2.6)
+    np.testing.assert_allclose(obj.points(), [[44.0, 2.6]], atol=1e-6)
+    assert obj.radial_speed_mps[0] == pytest.approx(-2.0 * math.cos(obj.azimuth_rad[0]))
+    assert len(perceived_obstacles(obj, "ego")[0]) == 1
+    # a remembered return predicted inside the FOV but not seen again is dropped
+    s2 = snap([("ego", 0.0, 0.0, 10.0, 0.0, 4.0, 1.8)], t=0.1)
+    r2 = Radar(RadarParams(memory_s=5.0, **EXACT), np.random.default_rng(0))
+    r2.objects(r2.scan(snap([EGO, ("B", 30.0, 0.0, 10.0, 0.0, 4.5, 1.8)]), ["ego"]))
+    assert r2.objects(r2.scan(s2, ["ego"])).n == 0
+
+
+def test_detection_log_table():
+    from sumo_avoid.sensors.log import detections_table
+
+    r = Radar(RadarParams(log_detections=True, **EXACT), np.random.default_rng(0))
+    r.scan(snap([EGO, ("A", 22.25, 0.0, 5.0, 0.0, 4.5, 1.8)]), ["ego"])
+    r.scan(snap([EGO, ("A", 22.25, 0.0, 5.0, 0.0, 4.5, 1.8)], t=0.1), ["ego"])
+    df = detections_table(r.log)
+    assert len(df) == 2 and list(df["target"]) == ["A", "A"]
+    np.testing.assert_allclose(df[["x", "y"]].to_numpy(), [[20.0, 0.0]] * 2, atol=1e-6)
+    assert detections_table([]).empty

@@ -1,0 +1,53 @@
+"""Radar + danger-time layer in the loop, on real libsumo runs (short scenarios)."""
+import pathlib
+import re
+
+import pytest
+
+from sumo_avoid import evaluate, runner, scenario
+
+SCN = pathlib.Path(__file__).resolve().parent.parent / "scenarios"
+
+
+def radar_brake(tmp_path, speed_mps: float, safety: str):
+    """radar_brake with lead and ego at ``speed_mps`` and the stopped car placed so that the lead
+    cuts out in front of it ~18 s in (as in the 100 km/h file)."""
+    xml = (SCN / "radar_brake.rou.xml").read_text()
+    xml = re.sub(r'(id="lead_car".*?maxSpeed=")[0-9.]+', rf"\g<1>{speed_mps}", xml)
+    xml = xml.replace('departSpeed="27.78"', f'departSpeed="{speed_mps}"')
+    stop = 100 + round(18 * speed_mps)
+    xml = xml.replace('departPos="600"', f'departPos="{stop}"').replace('endPos="600"', f'endPos="{stop}"')
+    rou = tmp_path / f"radar_brake_{speed_mps}.rou.xml"
+    rou.write_text(xml)
+    scn = scenario.load(SCN / "radar_brake.toml", [f"sim.routes=['{rou}']", f"controllers.scripted.speed_mps={speed_mps}",
+                                                   f'ego.safety="{safety}"', "sim.duration_s=28"])
+    return evaluate.compute(runner.run(scn))
+
+
+@pytest.mark.parametrize("kmh", [50, 80, 100])
+def test_radar_brake_danger_time_layer_stops_in_time(tmp_path, kmh):
+    m = radar_brake(tmp_path, round(kmh / 3.6, 2), "danger_time")
+    assert m["collisions"] == 0 and m["sumo_collisions"] == 0
+    assert m["radar_brakes"] >= 1
+    assert m["min_danger_time_s"] < 3.0  # the hidden car was a real threat
+    assert m["min_gap_m"] > 0.5
+
+
+def test_radar_brake_without_the_layer_crashes_at_100(tmp_path):
+    m = radar_brake(tmp_path, 27.78, "none")
+    assert m["collisions"] >= 1
+
+
+def test_overtaking_on_radar_reaches_goal():
+    for seed in (1, 2):
+        scn = scenario.load(SCN / "overtaking.toml", ['ego.sensor="radar"'], seed=seed)
+        m = evaluate.compute(runner.run(scn))
+        assert m["goal_reached"] and m["collisions"] == 0
+        assert "radar_warnings" in m and "min_danger_time_s" in m
+
+
+def test_cut_in_with_layer_no_collision():
+    scn = scenario.load(SCN / "cut_in.toml", ['ego.controller="scripted"', "controllers.scripted.speed_mps=25",
+                                              "sim.duration_s=15"])
+    m = evaluate.compute(runner.run(scn))
+    assert m["collisions"] == 0 and m["radar_brakes"] >= 1

@@ -1,0 +1,118 @@
+"""The HTML report: self-contained (images embedded) and its tables match the ledger."""
+import base64
+import html.parser
+import pathlib
+
+import pandas as pd
+import pytest
+
+from sumo_avoid import batch, ledger
+from sumo_avoid.cli import main
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+OVERTAKING = ROOT / "scenarios" / "overtaking.toml"
+SHORT = ["sim.duration_s=5", "output.plots=false"]  # no PNGs: the report draws them from trajectories.csv
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory):
+    d = tmp_path_factory.mktemp("study")
+    specs = batch.expand([OVERTAKING], [1, 2], SHORT, ["apf_sa", "apf"])
+    specs += batch.expand([OVERTAKING], [9], SHORT, inject_crash="segfault")
+    cfg = batch.BatchConfig(tuple(specs), d / "ledger.sqlite", workers=2)
+    assert batch.run_batch(cfg, progress=False) == {"total": 5, "skipped": 0, "done": 4, "failed": 1}
+    return d
+
+
+class _Page(html.parser.HTMLParser):
+    """Collects <img> sources, external references and the cells of the tables inside div#ID."""
+
+    def __init__(self):
+        super().__init__()
+        self.imgs, self.refs, self.tables = [], [], {}
+        self._div, self._row, self._cell = None, None, None
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if tag == "img":
+            self.imgs.append(a.get("src", ""))
+        for k in ("href", "src"):
+            if k in a and not a[k].startswith("data:"):
+                self.refs.append(a[k])
+        if tag == "div" and "id" in a:
+            self._div = a["id"]
+            self.tables[self._div] = []
+        elif tag == "tr" and self._div:
+            self._row = []
+        elif tag in ("td", "th") and self._row is not None:
+            self._cell = ""
+
+    def handle_endtag(self, tag):
+        if tag in ("td", "th") and self._cell is not None:
+            self._row.append(self._cell)
+            self._cell = None
+        elif tag == "tr" and self._row is not None:
+            self.tables[self._div].append(self._row)
+            self._row = None
+        elif tag == "div":
+            self._div = None
+
+    def handle_data(self, data):
+        if self._cell is not None:
+            self._cell += data
+
+
+def _frame(rows):
+    return pd.DataFrame(rows[1:], columns=rows[0])
+
+
+def _close(cell: str, value) -> bool:
+    if value is None or (isinstance(value, float) and value != value):
+        return cell == "n/a"
+    return abs(float(cell) - float(value)) <= 1e-3 * max(1.0, abs(float(value)))
+
+
+def test_report_is_self_contained_and_matches_the_ledger(study, tmp_path):
+    out = tmp_path / "r.html"
+    assert main(["report", str(study / "ledger.sqlite"), "--out", str(out), "--md", str(tmp_path / "s.md"),
+                 "--csv", str(tmp_path / "runs.csv")]) == 0
+    page = _Page()
+    page.feed(out.read_text())
+    assert page.refs == []  # nothing to fetch
+    assert len(page.imgs) == 2 + 1 + 1  # a trajectory per scenario x controller, box plots, time series
+    for src in page.imgs:
+        assert src.startswith("data:image/png;base64,")
+        assert base64.b64decode(src.split(",", 1)[1])[:8] == b"\x89PNG\r\n\x1a\n"
+
+    df = ledger.read(study / "ledger.sqlite")
+    summ = _frame(page.tables["summary"])
+    for (scn, ctl), g in df.groupby(["scenario", "controller"]):
+        row = summ[(summ["scenario"] == scn) & (summ["controller"] == ctl)].iloc[0]
+        d = g[g["status"] == "done"]
+        assert (int(row["runs"]), int(row["done"]), int(row["failed"])) == (len(g), len(d), len(g) - len(d))
+        if len(d):
+            assert _close(row["collisions_total"], d["collisions"].sum())
+            assert _close(row["min_gap_m_min"], d["min_gap_m"].min())
+            assert _close(row["goal_reached_rate"], d["goal_reached"].mean())
+            assert _close(row["mean_speed_mps_mean"], d["mean_speed_mps"].mean())
+    runs = _frame(page.tables["runs"]).set_index("key")
+    assert len(runs) == len(df) == 5
+    for r in df.to_dict(orient="records"):
+        shown = runs.loc[r["key"][:16]]
+        assert (shown["status"], int(shown["seed"])) == (r["status"], r["seed"])
+        for c in ("collisions", "min_gap_m", "phi_wall", "mean_speed_mps"):
+            assert _close(shown[c], r[c])
+    failed = _frame(page.tables["failed"])
+    assert failed["error"].tolist() == ["worker died: SIGSEGV (segmentation fault)"]
+    assert "| overtaking | apf_sa | 3 | 2 | 1 |" in (tmp_path / "s.md").read_text()
+    assert len(pd.read_csv(tmp_path / "runs.csv")) == 5
+
+
+def test_report_of_run_folders_and_bad_source(study, tmp_path, capsys):
+    out = tmp_path / "r.html"
+    assert main(["report", str(study / "runs"), "--out", str(out)]) == 0  # folders with metrics.json
+    page = _Page()
+    page.feed(out.read_text())
+    assert len(_frame(page.tables["runs"])) == 4 and all(s.startswith("data:") for s in page.imgs)
+    assert main(["report", str(tmp_path / "nothing"), "--out", str(out)]) == 2
+    assert capsys.readouterr().err.count("\n") == 1
