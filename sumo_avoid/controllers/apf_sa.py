@@ -29,6 +29,7 @@ import numpy as np
 from ..config import field_doc
 from ..geometry import footprint_corners, point_segment_distance
 from ..road import polyline_point_at, polyline_project
+from ..sensors.perception import obstacle_vehicles
 from .apf import ApfController, ApfParams, _unit
 from .base import EgoTask, Observation
 
@@ -176,13 +177,14 @@ class ApfSaController(ApfController):
     def _room_ahead(self, obs: Observation, row: int, at=None, heading=None) -> float:
         """Free length ahead of the ego's footprint (placed at ``at`` with ``heading``), m."""
         snap = obs.snapshot
-        others = np.flatnonzero(np.arange(snap.n) != row)
-        if not len(others):
-            return math.inf
         h = snap.heading[row] if heading is None else heading
         pos = snap.pos[row] if at is None else at
+        # what the ego perceives (radar + tracker when the sensor is on, else ground truth)
+        o_pos, o_hd, o_len, o_wid, _ = obstacle_vehicles(obs, row, snap.pos[row], self.p.sense_radius_m)
+        if not len(o_pos):
+            return math.inf
         hd = np.array([math.cos(h), math.sin(h)])
-        oc = footprint_corners(snap.pos[others], snap.heading[others], snap.length[others], snap.width[others])
+        oc = footprint_corners(o_pos, o_hd, o_len, o_wid)
         rel = oc - pos
         x, y = rel @ hd, rel @ np.array([-hd[1], hd[0]])
         half = 0.5 * snap.width[row] + self.p.gov_margin_m
