@@ -21,7 +21,7 @@ import time
 from dataclasses import dataclass, field
 
 from . import ledger as ledger_mod
-from .config import ScenarioError
+from .config import ScenarioError, check_table
 from .worker import CRASHES, kill_all, run_one
 
 if sys.version_info >= (3, 11):
@@ -160,12 +160,7 @@ def load_batch_file(path) -> tuple[list[RunSpec], dict]:
     specs, seen = [], set()
     for i, e in enumerate(entries):
         where = f"runs[{i}]"
-        if not isinstance(e, dict):
-            raise ScenarioError(file, where, "a table", e)
-        for k in e:
-            if k not in allowed_run:
-                raise ScenarioError(file, f"{where}.{k}", f"one of the known keys {sorted(allowed_run)}",
-                                    show_got=False)
+        check_table(file, where, e, allowed_run)
         if not isinstance(e.get("scenario"), str):
             raise ScenarioError(file, f"{where}.scenario", "a scenario file path (string)", e.get("scenario"))
         sets = e.get("set", [])

@@ -21,6 +21,15 @@ class ScenarioError(ValueError):
         super().__init__(f"{file}: key '{key}': expected {expected}{got_txt}")
 
 
+def check_table(file: str, where: str, table, allowed) -> None:
+    """A ``[[...]]`` entry must be a table with only ``allowed`` keys."""
+    if not isinstance(table, dict):
+        raise ScenarioError(file, where, "a table", table)
+    for k in table:
+        if k not in allowed:
+            raise ScenarioError(file, f"{where}.{k}", f"one of the known keys {sorted(allowed)}", show_got=False)
+
+
 def field_doc(default=dataclasses.MISSING, *, doc: str = "", signed: bool = False, **kw):
     """A dataclass field with a docstring (units!) and whether negative values are allowed."""
     return dataclasses.field(default=default, metadata={"doc": doc, "signed": signed}, **kw)

@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from . import geometry
+
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
 
@@ -32,15 +34,9 @@ _NICE = [1, 2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 25, 30, 40, 50]
 
 
 def footprint_corners(x, y, heading, length, width) -> np.ndarray:
-    """(N,4,2) rectangle corners for centre/heading/length/width arrays (front-left first, CCW)."""
+    """(N,4,2) rectangle corners from column arrays (see :func:`sumo_avoid.geometry.footprint_corners`)."""
     x, y, h, ln, w = (np.atleast_1d(np.asarray(v, float)) for v in (x, y, heading, length, width))
-    c, s = np.cos(h), np.sin(h)
-    local = np.array([[0.5, 0.5], [-0.5, 0.5], [-0.5, -0.5], [0.5, -0.5]])  # (4,2) in (l, w) units
-    lx = local[None, :, 0] * ln[:, None]
-    ly = local[None, :, 1] * w[:, None]
-    px = x[:, None] + lx * c[:, None] - ly * s[:, None]
-    py = y[:, None] + lx * s[:, None] + ly * c[:, None]
-    return np.stack([px, py], axis=-1)
+    return geometry.footprint_corners(np.column_stack([x, y]), h, ln, w)
 
 
 def _new_figure(figsize):

@@ -22,7 +22,7 @@ import re
 import tempfile
 import xml.etree.ElementTree as ET
 
-from .config import ScenarioError
+from .config import ScenarioError, check_table
 
 OPS = {"==": operator.eq, "!=": operator.ne, "<=": operator.le, ">=": operator.ge, "<": operator.lt, ">": operator.gt}
 AGGREGATES = ("rate", "mean", "min", "max")
@@ -116,11 +116,7 @@ def load(path, seeds_override=None, extra_sets=()) -> list[Entry]:
     allowed = {"name", "scenario", "controller", "seeds", "set", "criteria"}
     for i, e in enumerate(entries):
         where = f"entry[{i}]"
-        if not isinstance(e, dict):
-            raise ScenarioError(file, where, "a table", e)
-        for k in e:
-            if k not in allowed:
-                raise ScenarioError(file, f"{where}.{k}", f"one of the known keys {sorted(allowed)}", show_got=False)
+        check_table(file, where, e, allowed)
         for k in ("name", "scenario"):
             if not isinstance(e.get(k), str) or not e[k]:
                 raise ScenarioError(file, f"{where}.{k}", "a non-empty string", e.get(k))

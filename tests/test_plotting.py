@@ -33,7 +33,8 @@ def synthetic_traj(duration_s: float = 20.0, dt: float = 0.5) -> pd.DataFrame:
 def test_footprint_corners():
     c = footprint_corners([0.0], [0.0], [np.pi / 2], [4.0], [2.0])
     assert c.shape == (1, 4, 2)
-    assert c[0, 0] == pytest.approx([-1.0, 2.0])  # front-left of a car heading north
+    assert c[0, 0] == pytest.approx([1.0, 2.0])  # front-right of a car heading north (geometry order)
+    assert c[0, 1] == pytest.approx([-1.0, 2.0])  # then front-left, CCW
 
 
 def test_plot_trajectories_writes_png(tmp_path):
