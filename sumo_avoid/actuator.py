@@ -6,7 +6,8 @@ desired direction at a yaw rate limited by ``max_yaw_rate``, by the lateral acce
 cannot turn on the spot. The commanded forward speed is the projection of the desired velocity on
 the heading (a car slows down for a sharp turn and brakes when the desired velocity points
 backwards). With ``max_reverse_speed_mps > 0`` a (nearly) stopped car whose desired direction is
-more than 100 degrees off its heading reverses towards it instead.
+more than 90 degrees off its heading reverses towards it instead (no dead zone between
+forward and reverse in which a stopped car could do nothing).
 Pure numpy, vectorised over egos; no SUMO here.
 """
 from __future__ import annotations
@@ -17,7 +18,7 @@ import numpy as np
 
 from .scenario import ActuatorConfig
 
-_REVERSE_ANGLE = np.radians(100.0)
+_REVERSE_ANGLE = np.radians(90.0)
 
 
 def wrap_angle(a):
