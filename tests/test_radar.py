@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from sumo_avoid.sensors.radar import Radar, RadarParams, ray_depth
+from sumo_avoid.sensors.radar import Radar, RadarParams, _shadowed, ray_depth
 from sumo_avoid.snapshot import Snapshot
 
 EXACT = dict(range_sigma_m=0.0, speed_sigma_mps=0.0, angular_resolution_deg=0.0)
@@ -35,6 +35,23 @@ def test_ray_depth_unit_square():
     d = ray_depth(sq[None], np.array([0.0, math.atan2(1, 1), math.pi / 2, math.atan2(0.5, 1)]))
     # straight ahead hits x=1 at 1; 45 deg hits the corner (1,1) at sqrt 2; 90 deg misses; (1,0.5)
     np.testing.assert_allclose(d, [1.0, math.sqrt(2), np.inf, math.hypot(1, 0.5)], atol=1e-12)
+
+
+def test_shadow_prefilter_hand_built():
+    """Boxes as seen from the origin looking along +x (azimuths by hand):
+    A: x 10..14, y -2..2 -> [-11.3, 11.3] deg, farthest corner 14.14 m;
+    B: x 20..24, y -1..1 (inside A's cone, nearest point 20 m > 14.14) -> shadowed by A;
+    C: x 20..24, y 3..5 (cone 7.1..14.0 deg, not inside A's) -> not shadowed;
+    D: x 14.05..18, y -0.5..0.5 (inside the cone but nearest 14.05 m < 14.14 m) -> kept (conservative)."""
+    box = lambda x0, x1, y0, y1: [[x0, y0], [x1, y0], [x1, y1], [x0, y1]]  # noqa: E731
+    rel = np.array([[box(10, 14, -2, 2), box(20, 24, -1, 1), box(20, 24, 3, 5), box(14.05, 18, -0.5, 0.5)]], float)
+    az = np.arctan2(rel[..., 1], rel[..., 0])
+    lo, hi = az.min(axis=2), az.max(axis=2)
+    assert math.degrees(hi[0, 0]) == pytest.approx(11.3099, abs=1e-3)
+    ok = np.ones((1, 4), bool)
+    assert _shadowed(rel, lo, hi, ok).tolist() == [[False, True, False, False]]
+    ok[0, 0] = False  # an occluder that is not a candidate shadows nothing
+    assert not _shadowed(rel, lo, hi, ok).any()
 
 
 def test_range_azimuth_radial_speed_hand_computed():

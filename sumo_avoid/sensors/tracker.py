@@ -26,7 +26,8 @@ class Tracker:
         self.half = math.radians(fov_deg) / 2
         self.max_range_m = max_range_m
         self.gate_m = gate_m
-        self._ego: np.ndarray = np.zeros(0, dtype=object)  # (M,) ego id of each remembered return
+        self._ids: tuple[str, ...] = ()  # the egos of the last scan (index space of _e)
+        self._e = np.zeros(0, dtype=int)  # (M,) ego index (into _ids) of each remembered return
         self._p = np.zeros((0, 2))  # world position when last seen, m
         self._v = np.zeros((0, 2))  # estimated velocity, m/s
         self._t = np.zeros(0)  # time last seen, s
@@ -34,16 +35,21 @@ class Tracker:
 
     def update(self, det: Detections) -> Detections:
         """Fold in a scan (a held scan changes nothing) and return current + coasted returns."""
-        ego_idx = {v: i for i, v in enumerate(det.ego_ids)}
         now = det.time_s
+        if det.ego_ids != self._ids:  # egos came or went: re-index the memory, forget the gone
+            ego_idx = {v: i for i, v in enumerate(det.ego_ids)}
+            e = np.array([ego_idx.get(v, -1) for v in self._ids] + [-1], dtype=int)[self._e]
+            k = np.flatnonzero(e >= 0)
+            self._e, self._p, self._v, self._t = e[k], self._p[k], self._v[k], self._t[k]
+            self._ids = det.ego_ids
         if now > self._scan_time:
             self._scan_time = now
             a = det.sensor_heading[det.ego] + det.azimuth_rad
             u = np.column_stack([np.cos(a), np.sin(a)])
             p_new = det.sensor_pos[det.ego] + det.range_m[:, None] * u
             v_new = velocity_estimate(det)
-            keep = np.array([e in ego_idx for e in self._ego], bool) & (now - self._t <= self.memory_s)
-            e_old = np.array([ego_idx.get(e, 0) for e in self._ego], dtype=int)
+            keep = now - self._t <= self.memory_s
+            e_old = self._e
             r, az, pred = self._polar(det, e_old, now)
             keep &= ~((np.abs(az) <= self.half) & (r <= self.max_range_m))  # should be seen now: trust the scan
             if keep.any() and det.n:
@@ -51,11 +57,11 @@ class Tracker:
                 d = np.where(e_old[:, None] == det.ego[None, :], d, np.inf)
                 keep &= d.min(axis=1) > self.gate_m  # re-observed: the new return replaces it
             k = np.flatnonzero(keep)
-            self._ego = np.concatenate([np.array([det.ego_ids[e] for e in det.ego], dtype=object), self._ego[k]])
+            self._e = np.concatenate([det.ego, self._e[k]])
             self._p = np.concatenate([p_new, self._p[k]])
             self._v = np.concatenate([v_new, self._v[k]])
             self._t = np.concatenate([np.full(det.n, now), self._t[k]])
-        e = np.array([ego_idx[x] for x in self._ego], dtype=int)
+        e = self._e
         r, az, _ = self._polar(det, e, now)
         a = det.sensor_heading[e] + az
         u = np.column_stack([np.cos(a), np.sin(a)])
