@@ -1,11 +1,12 @@
 """Batches of runs (scenarios x seeds x parameter grid), each run in its own worker process.
 
-Every run is a fresh ``python -m sumo_avoid.worker`` subprocess (libsumo runs one simulation per
-process, and a segfault in SUMO must cost only its own run). A run that raises, dies by a signal
-or exceeds its timeout is recorded ``failed`` with its cause; the batch goes on. Results go to
-the SQLite ledger (:mod:`sumo_avoid.ledger`) one transaction per run, written by this (parent)
-process only; re-running the same batch skips the recorded runs. Runs execute on a local pool of
-``workers`` threads each waiting on one subprocess, or on a Dask cluster (``scheduler``).
+Every run is its own process, forked from a warm fork server or a fresh interpreter
+(:mod:`sumo_avoid.worker`; libsumo runs one simulation per process, and a segfault in SUMO must
+cost only its own run). A run that raises, dies by a signal or exceeds its timeout is recorded
+``failed`` with its cause; the batch goes on. Results go to the SQLite ledger
+(:mod:`sumo_avoid.ledger`) one transaction per run, written by this (parent) process only;
+re-running the same batch skips the recorded runs. Runs execute on a local pool of ``workers``
+threads each waiting on one run's process, or on a Dask cluster (``scheduler``).
 """
 from __future__ import annotations
 
@@ -21,6 +22,7 @@ import time
 from dataclasses import dataclass, field
 
 from . import ledger as ledger_mod
+from . import worker
 from .config import ScenarioError, check_table
 from .worker import CRASHES, kill_all, run_one
 
@@ -45,10 +47,12 @@ class RunSpec:
     name: str = ""  # scenario name (filled by plan())
     effective_controller: str = ""
     net_file: str = ""
+    plots: bool = True  # the run writes plots (the fork server then preloads matplotlib once)
 
     def to_json(self) -> dict:
         return {"scenario": self.scenario, "seed": self.seed, "overrides": list(self.overrides),
-                "controller": self.controller, "inject_crash": self.inject_crash, "key": self.key}
+                "controller": self.controller, "inject_crash": self.inject_crash, "key": self.key,
+                "plots": self.plots}
 
 
 @dataclass(frozen=True)
@@ -59,6 +63,7 @@ class BatchConfig:
     timeout_s: float = 600.0
     scheduler: str | None = None
     retry_failed: bool = False
+    start: str | None = None  # how run processes start: "fork" (warm fork server) or "spawn"; None: best available
 
 
 def parse_seeds(text, file: str = "<command line>", key: str = "--seeds") -> tuple[int, ...]:
@@ -110,7 +115,7 @@ def plan(scenario_path, seed: int, overrides=(), controller=None, inject_crash=N
     h.update(json.dumps({"overrides": list(overrides), "controller": scn.spec.ego.controller,
                          "seed": scn.spec.sim.seed, "inject_crash": inject_crash}, sort_keys=True).encode())
     return RunSpec(str(path), scn.spec.sim.seed, tuple(overrides), controller, inject_crash, h.hexdigest(),
-                   scn.name, scn.spec.ego.controller, str(scn.net_file))
+                   scn.name, scn.spec.ego.controller, str(scn.net_file), scn.spec.output.plots)
 
 
 def expand(scenarios, seeds, overrides=(), controllers=(None,), grid: dict | None = None,
@@ -237,7 +242,7 @@ class _Progress:
 
 def _local_results(specs, root, cfg: BatchConfig):
     with cf.ThreadPoolExecutor(max_workers=cfg.workers, thread_name_prefix="sumo-avoid-run") as ex:
-        futs = {ex.submit(run_one, s.to_json(), str(root), cfg.timeout_s): s for s in specs}
+        futs = {ex.submit(run_one, s.to_json(), str(root), cfg.timeout_s, cfg.start): s for s in specs}
         try:
             for fut in cf.as_completed(futs):
                 yield futs[fut], fut.result()
@@ -252,7 +257,7 @@ def _dask_results(specs, root, cfg: BatchConfig):
     from dask.distributed import Client, as_completed
 
     with Client(cfg.scheduler, set_as_default=False) as client:
-        futs = {client.submit(run_one, s.to_json(), str(root), cfg.timeout_s, key=f"sumo-avoid-{s.key}",
+        futs = {client.submit(run_one, s.to_json(), str(root), cfg.timeout_s, cfg.start, key=f"sumo-avoid-{s.key}",
                               pure=False): s for s in specs}
         for fut in as_completed(list(futs), loop=client.loop):
             try:
@@ -274,6 +279,8 @@ def run_batch(cfg: BatchConfig, progress: bool | None = None, log=print) -> dict
         counts = {"total": len(cfg.runs), "skipped": len(cfg.runs) - len(todo), "done": 0, "failed": 0}
         if counts["skipped"]:
             log(f"ledger {cfg.ledger}: {counts['skipped']} of {len(cfg.runs)} runs already recorded, skipped")
+        if todo and not cfg.scheduler and (cfg.start or worker.default_start()) == "fork":
+            worker.prestart()  # the fork server imports while the ledger is read and the pool starts
         bar = _Progress(len(todo), progress)
         results = _dask_results if cfg.scheduler else _local_results
         try:
@@ -305,6 +312,9 @@ def add_parser(sub) -> None:
     b.add_argument("--scheduler", default=None, metavar="ADDRESS", help="run on a Dask cluster, e.g. tcp://host:8786")
     b.add_argument("--timeout", type=float, default=None, help="per-run timeout, s (default 600)")
     b.add_argument("--retry-failed", action="store_true", help="re-run runs recorded as failed")
+    b.add_argument("--start", default=None, metavar="fork|spawn",
+                   help="how each run's process starts: fork (from a warm fork server; default on Linux) "
+                        "or spawn (a fresh interpreter per run)")
     b.add_argument("--quiet", action="store_true", help="no progress bar")
     b.set_defaults(func=cmd_batch)
 
@@ -339,13 +349,21 @@ def config_from_args(args) -> BatchConfig:
         raise ScenarioError("<command line>", "--workers", "a positive integer", args.workers)
     if args.timeout is not None and args.timeout <= 0:
         raise ScenarioError("<command line>", "--timeout", "a positive number of seconds", args.timeout)
+    if args.start is not None and args.start not in worker.STARTS:
+        raise ScenarioError("<command line>", "--start", "fork or spawn", args.start)
+    if args.start == "fork" and not args.scheduler and worker.default_start() != "fork":
+        raise ScenarioError("<command line>", "--start", "spawn: this system has no fork server (Linux with pidfd)",
+                            args.start)
     kw = {"workers": args.workers or opts.get("workers") or os.cpu_count() or 1,
           "timeout_s": args.timeout or opts.get("timeout_s", 600.0)}
     led = args.ledger or opts.get("ledger") or pathlib.Path("reports/batch/ledger.sqlite")
-    return BatchConfig(tuple(specs), pathlib.Path(led), scheduler=args.scheduler, retry_failed=args.retry_failed, **kw)
+    return BatchConfig(tuple(specs), pathlib.Path(led), scheduler=args.scheduler, retry_failed=args.retry_failed,
+                       start=args.start, **kw)
 
 
 def cmd_batch(args) -> int:
+    if args.scheduler is None and args.start != "spawn":
+        worker.prestart()  # its imports (0.6-1.3 s) overlap with planning the runs (a scenario load per run)
     cfg = config_from_args(args)
     where = f"Dask scheduler {cfg.scheduler}" if cfg.scheduler else f"{cfg.workers} local workers"
     print(f"batch: {len(cfg.runs)} runs on {where} -> {cfg.ledger}", flush=True)

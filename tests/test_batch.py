@@ -1,8 +1,10 @@
-"""Batches on real libsumo: crash isolation, SIGKILL + resume, Dask == local pool, bad input.
+"""Batches on real libsumo: crash isolation, SIGKILL + resume, Dask == local pool, bad input,
+the fork server (warm imports, one forked process per run) against fresh interpreters.
 
 Runs are short (5 s of simulated time, no plots) to keep the whole file around a minute.
 """
 import contextlib
+import json
 import os
 import pathlib
 import shutil
@@ -14,12 +16,13 @@ import time
 
 import pytest
 
-from sumo_avoid import batch, ledger
+from sumo_avoid import batch, ledger, worker
 from sumo_avoid.cli import main
 from sumo_avoid.worker import run_one
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 OVERTAKING = ROOT / "scenarios" / "overtaking.toml"
+SEGFAULT_NET = ROOT / "tests" / "data" / "segfault_net.toml"  # a real input that segfaults SUMO 1.28 on load
 SHORT = ["sim.duration_s=5", "output.plots=false"]
 METRIC_COLS = ["collisions", "min_gap_m", "phi_coll", "phi_wall", "mean_speed_mps", "path_length_m", "steps",
                "sumo_collisions", "goal_reached"]
@@ -43,11 +46,10 @@ seeds = "{seeds}"
 controllers = ["apf_sa", "apf"]
 set = {SHORT!r}
 
-[[runs]]   # test-only fault injection: a real SIGSEGV (NULL dereference) in the worker
-scenario = "{OVERTAKING}"
+[[runs]]   # a broken net: SUMO itself segfaults while loading it (no injection)
+scenario = "{SEGFAULT_NET}"
 seeds = [101]
 set = {SHORT!r}
-inject_crash = "segfault"
 
 [[runs]]   # test-only fault injection: os.abort() in the worker
 scenario = "{OVERTAKING}"
@@ -58,14 +60,25 @@ inject_crash = "abort"
     return f
 
 
-def _alive_workers(marker: str) -> list[int]:
+def _job_parent(arg: str):
+    try:
+        return json.loads(arg).get("parent")
+    except (ValueError, AttributeError):
+        return None
+
+
+def _alive_workers(batch_pid: int) -> list[int]:
+    """Worker processes of the batch process ``batch_pid``: its fork server and the runs forked
+    from it (``-m sumo_avoid.worker --serve PID``) or spawned runs (``"parent": PID`` in the job)."""
     pids = []
     for p in pathlib.Path("/proc").iterdir():
         try:
-            cmd = (p / "cmdline").read_bytes().decode(errors="replace")
+            args = (p / "cmdline").read_bytes().decode(errors="replace").split("\0")
         except OSError:
             continue
-        if p.name.isdigit() and "sumo_avoid.worker" in cmd and marker in cmd:
+        if not p.name.isdigit() or "sumo_avoid.worker" not in args:
+            continue
+        if args[-3:-1] == ["--serve", str(batch_pid)] or _job_parent(args[-2]) == batch_pid:
             pids.append(int(p.name))
     return pids
 
@@ -85,10 +98,11 @@ def _kill_midway(proc, db) -> dict:
             if n >= 12:
                 break
     assert proc.poll() is None, "batch finished before it could be killed"
+    assert _alive_workers(proc.pid), "no worker processes found: the check below would prove nothing"
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     time.sleep(1.0)
-    assert _alive_workers(str(db.parent)) == []  # PDEATHSIG: no orphaned runs keep going
+    assert _alive_workers(proc.pid) == []  # EOF + PDEATHSIG: no fork server, no orphaned runs
     before = ledger.row_hashes(db)
     return before
 
@@ -115,6 +129,7 @@ def test_crashes_cost_only_their_run_and_sigkilled_batch_resumes(tmp_path):
     assert all(after[k] == h for k, h in before.items())  # nothing finished was rewritten
     failed = df[df["status"] == "failed"].set_index("seed")
     assert sorted(failed.index) == [101, 102]
+    assert failed.loc[101, "scenario"] == "segfault_net"
     assert failed.loc[101, "error"] == "worker died: SIGSEGV (segmentation fault)"
     assert failed.loc[102, "error"] == "worker died: SIGABRT (abort)"
     done = df[df["status"] == "done"]
@@ -126,6 +141,28 @@ def test_crashes_cost_only_their_run_and_sigkilled_batch_resumes(tmp_path):
 
     r = _cli("batch", bf)  # a third time: nothing left to do
     assert "42 of 42 runs already recorded" in r.stdout and ledger.row_hashes(db) == after
+
+
+def test_ctrl_c_kills_the_running_runs_and_records_none_of_them(tmp_path):
+    db = tmp_path / "ledger.sqlite"
+    proc = subprocess.Popen([sys.executable, "-m", "sumo_avoid.cli", "batch", str(OVERTAKING), "--seeds", "1-20",
+                             "--set", "output.plots=false", "--workers", "2", "--ledger", str(db)], cwd=ROOT,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env={**os.environ, "CI": "true"},
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))  # as in a terminal
+    try:
+        deadline = time.time() + 60
+        while len(_alive_workers(proc.pid)) < 3 and time.time() < deadline:  # the server and two runs
+            time.sleep(0.05)
+        assert len(_alive_workers(proc.pid)) >= 3
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+    assert proc.returncode == 130 and "interrupted" in err
+    time.sleep(0.5)
+    assert _alive_workers(proc.pid) == []
+    with contextlib.closing(sqlite3.connect(db)) as con:
+        assert con.execute("SELECT count(*) FROM runs WHERE status = 'failed'").fetchone()[0] == 0
 
 
 def test_dask_cluster_gives_the_same_metrics_as_the_local_pool(tmp_path):
@@ -165,7 +202,8 @@ def test_run_key_covers_scenario_net_routes_overrides_controller_seed(tmp_path):
 def test_bad_input_is_one_line_and_writes_nothing(tmp_path):
     db = tmp_path / "l.sqlite"
     for args, words in [(["--seeds", "5-1"], "--seeds"), (["--set", "sim.duration_s=-1"], "sim.duration_s"),
-                        (["--workers", "0"], "--workers"), (["--controller", "nope"], "ego.controller")]:
+                        (["--workers", "0"], "--workers"), (["--controller", "nope"], "ego.controller"),
+                        (["--start", "vfork"], "--start")]:
         r = _cli("batch", OVERTAKING, "--ledger", db, *args)
         assert r.returncode == 2, r.stderr
         assert r.stderr.count("\n") == 1 and words in r.stderr and r.stderr.startswith("sumo-avoid: error:")
@@ -176,18 +214,89 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path):
     assert not db.exists()
 
 
-def test_sumo_error_and_timeout_are_recorded_as_failed(tmp_path):
+@pytest.mark.parametrize("start", worker.STARTS)
+def test_sumo_error_and_timeout_are_recorded_as_failed(tmp_path, start):
     scn = tmp_path / "s.toml"
     scn.write_text(OVERTAKING.read_text().replace("../nets/", f"{ROOT}/nets/")
                    .replace('"overtaking.rou.xml"', '"bad.rou.xml"'))
     (tmp_path / "bad.rou.xml").write_text((ROOT / "scenarios" / "overtaking.rou.xml").read_text()
                                           .replace('edges="road"', 'edges="no_such_edge"'))
     spec = batch.plan(scn, 1, SHORT)
-    res = run_one(spec.to_json(), str(tmp_path / "runs"), 120)
+    res = run_one(spec.to_json(), str(tmp_path / "runs"), 120, start)
     assert res["status"] == "failed" and "no_such_edge" in res["error"]  # SUMO's own message
-    res = run_one(batch.plan(OVERTAKING, 1, SHORT).to_json(), str(tmp_path / "runs"), 0.3)
-    assert res == {**res, "status": "failed", "error": "timeout: run exceeded 0.3 s and was killed"}
+    # the whole 90 s scenario: well over 0.3 s of wall time even without interpreter start
+    res = run_one(batch.plan(OVERTAKING, 1, ["output.plots=false"]).to_json(), str(tmp_path / "runs"), 0.3, start)
+    assert res == {**res, "status": "failed", "error": "timeout: run exceeded 0.3 s and was killed", "start": start}
     assert not any((tmp_path / "runs" / ".tmp").iterdir())  # temporary folders were moved into place
+
+
+def _same_files(a, b, names=("metrics.json", "trajectories.csv")) -> bool:
+    return all((pathlib.Path(a) / n).read_bytes() == (pathlib.Path(b) / n).read_bytes() for n in names)
+
+
+def test_forked_run_equals_fresh_interpreter_run_and_skips_the_imports(tmp_path):
+    spec = batch.plan(OVERTAKING, 3, SHORT).to_json()
+    worker.prestart()
+    runs = {start: run_one(spec, str(tmp_path / start), 120, start) for start in ("fork", "spawn")}
+    fork, spawn = runs["fork"], runs["spawn"]
+    assert fork["status"] == spawn["status"] == "done"
+    assert _same_files(fork["artifacts"], spawn["artifacts"])  # byte-identical results
+    # the forked child finds everything imported; the fresh interpreter imports numpy, pandas, libsumo...
+    assert fork["marks"]["imported_wall"] - fork["marks"]["entry_wall"] < 0.1
+    assert spawn["marks"]["imported_wall"] - spawn["marks"]["entry_wall"] > 0.2
+    for res in runs.values():
+        marks = res["marks"]
+        assert marks["dispatch_wall"] <= marks["entry_wall"] <= marks["sumo_start_wall"] <= marks["reaped_wall"]
+        assert res["overhead_s"] == pytest.approx(marks["sumo_start_wall"] - marks["dispatch_wall"])
+    assert fork["marks"]["dispatch_wall"] <= fork["marks"]["fork_wall"] <= fork["marks"]["entry_wall"]
+
+
+def test_forked_run_writes_plots(tmp_path):
+    spec = batch.plan(OVERTAKING, 1, ["sim.duration_s=5"])
+    assert spec.plots  # the fork server imports matplotlib before forking this run
+    res = run_one(spec.to_json(), str(tmp_path), 120, "fork")
+    assert res["status"] == "done"
+    assert all((pathlib.Path(res["artifacts"]) / f).stat().st_size > 0 for f in ("trajectory.png", "timeseries.png"))
+
+
+@pytest.mark.parametrize("start", worker.STARTS)
+def test_a_crashing_run_costs_only_itself(tmp_path, start):
+    specs = {"segfault_net": batch.plan(SEGFAULT_NET, 1, SHORT),  # SUMO's own SIGSEGV
+             "segfault": batch.plan(OVERTAKING, 1, SHORT, inject_crash="segfault"),  # NULL dereference
+             "abort": batch.plan(OVERTAKING, 1, SHORT, inject_crash="abort")}
+    ok = batch.plan(OVERTAKING, 1, SHORT)
+    if start == "fork":
+        worker.prestart()
+        server = worker._server().proc.pid
+    errors = {name: run_one(s.to_json(), str(tmp_path), 120, start)["error"] for name, s in specs.items()}
+    assert errors == {"segfault_net": "worker died: SIGSEGV (segmentation fault)",
+                      "segfault": "worker died: SIGSEGV (segmentation fault)",
+                      "abort": "worker died: SIGABRT (abort)"}
+    assert run_one(ok.to_json(), str(tmp_path), 120, start)["status"] == "done"
+    if start == "fork":
+        assert worker._server().proc.pid == server  # the server outlived its crashing children
+
+
+def test_a_dead_fork_server_fails_its_runs_and_is_replaced(tmp_path):
+    import threading
+
+    worker.prestart()
+    server = worker._server()
+    out = {}
+    spec = batch.plan(OVERTAKING, 1, ["output.plots=false"]).to_json()  # the whole scenario: seconds
+    t = threading.Thread(target=lambda: out.update(run_one(spec, str(tmp_path), 120, "fork")))
+    t.start()
+    deadline = time.time() + 30
+    while not server.waiting and time.time() < deadline:
+        time.sleep(0.01)
+    time.sleep(0.3)  # the run is forked and going
+    server.kill()
+    t.join(30)
+    assert out["status"] == "failed" and out["error"] == "worker died: the fork server died: SIGKILL (killed)"
+    time.sleep(0.5)
+    assert _alive_workers(os.getpid()) == []  # its child went with it (PR_SET_PDEATHSIG)
+    res = run_one(batch.plan(OVERTAKING, 2, SHORT).to_json(), str(tmp_path), 120, "fork")
+    assert res["status"] == "done" and worker._server() is not server
 
 
 @pytest.mark.parametrize("text,seeds", [("1-3", (1, 2, 3)), ("1,3,7", (1, 3, 7)), ("1-2,9", (1, 2, 9)),
