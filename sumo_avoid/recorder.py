@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+from scipy.spatial import cKDTree
 
 from .snapshot import Snapshot
 
@@ -26,8 +27,8 @@ class Recorder:
             return
         keep = snap.is_ego.copy()
         if self.radius > 0 and keep.any():
-            d = np.hypot(*(snap.pos[:, None, :] - snap.pos[None, snap.is_ego, :]).transpose(2, 0, 1))
-            keep |= d.min(axis=1) <= self.radius
+            d, _ = cKDTree(snap.pos[snap.is_ego]).query(snap.pos, k=1, distance_upper_bound=self.radius * (1 + 1e-9))
+            keep |= d <= self.radius
         elif self.radius <= 0:
             keep[:] = True
         idx = np.flatnonzero(keep)

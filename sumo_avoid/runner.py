@@ -65,10 +65,12 @@ def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
     recorder = Recorder(spec.output.record_radius_m)
     # radar (own random stream) when controllers use it or the danger-time layer needs it; the layer
     # also runs as a monitor (counters only, velocities untouched) with sensor = "radar", safety = "none"
-    radar = layer = None
+    radar = rear = layer = None
     if spec.ego.sensor == "radar" or spec.ego.safety == "danger_time":
         radar = Radar(spec.radar, np.random.default_rng([spec.sim.seed, 4]))
         layer = DangerTimeLayer(spec.safety)
+        if spec.radar.rear and spec.ego.sensor == "radar":
+            rear = Radar(spec.radar, np.random.default_rng([spec.sim.seed, 5]), mount="rear")
     arena = spec.arena
     ego_ids = set(spec.ego.ids) | (set(arena.ids) if arena is not None else set())
     obstacles = tuple(np.asarray(o.shape, float) for o in spec.obstacles)
@@ -133,8 +135,12 @@ def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
                 speed = np.array([active[v] for v in present])
                 speed = np.where(np.isnan(speed), snap.speed[rows], speed)
                 det = radar.scan(snap, present, obstacles) if radar is not None else None
-                v_des = controller.act(Observation(snap, tuple(present), obstacles,
-                                                   radar.objects(det) if spec.ego.sensor == "radar" else None))
+                seen = None
+                if spec.ego.sensor == "radar":  # with a rear radar: one fused memory (sensors.tracker)
+                    seen = (radar.objects(det) if rear is None
+                            else radar.objects((det, rear.scan(snap, present, obstacles))))
+                    seen = seen if isinstance(seen, tuple) else (seen,)
+                v_des = controller.act(Observation(snap, tuple(present), obstacles, seen))
                 if layer is not None:
                     v_lim, _ = layer.apply(v_des, det, snap.width[rows], speed, dt)
                     v_des = v_lim if spec.ego.safety == "danger_time" else v_des
@@ -163,4 +169,4 @@ def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
     return RunResult(scn, recorder.table(), recorder.sumo_events(), goals, road, step, sim_time,
                      stats, {"setup_s": t_loop - t_start, "loop_s": t_end - t_loop,
                              "total_s": t_end - t_start}, walls, obstacles,
-                     radar.log if radar is not None else [])
+                     (radar.log if radar is not None else []) + (rear.log if rear is not None else []))

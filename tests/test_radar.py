@@ -214,3 +214,44 @@ def test_detection_log_table():
     assert len(df) == 2 and list(df["target"]) == ["A", "A"]
     np.testing.assert_allclose(df[["x", "y"]].to_numpy(), [[20.0, 0.0]] * 2, atol=1e-6)
     assert detections_table([]).empty
+
+
+def test_tracker_gate_matches_only_returns_of_the_same_ego():
+    from sumo_avoid.sensors.tracker import _near_same_ego
+
+    p = np.array([[0.0, 0.0], [0.0, 0.0], [100.0, 0.0]])
+    e = np.array([0, 1, 1])
+    q = np.array([[2.0, 0.0], [0.5, 0.0], [102.9, 0.0]])  # 2 m from p0 (ego 0), 0.5 m (ego 2), 2.9 m (ego 1)
+    f = np.array([0, 2, 1])
+    assert _near_same_ego(p, e, q, f, 3.0).tolist() == [True, False, True]
+    assert _near_same_ego(p, e, q, f, 1.0).tolist() == [False, False, False]
+
+
+def test_rear_radar_sees_behind_not_ahead():
+    """Rear radar at the rear bumper (x = -2 for the 4 m ego), boresight -x: car B 20 m behind
+    (front bumper at x = -17.75 ... nearest point 15.75 m) closing at 3 m/s is seen; A ahead is not."""
+    s = snap([EGO, ("A", 22.25, 0.0, 5.0, 0.0, 4.5, 1.8), ("B", -20.0, 0.0, 13.0, 0.0, 4.5, 1.8)])
+    det = Radar(RadarParams(**EXACT), np.random.default_rng(0), mount="rear").scan(s, ["ego"])
+    assert det.mount == "rear" and det.target == ("B",)
+    np.testing.assert_allclose(det.sensor_pos, [[-2.0, 0.0]], atol=1e-12)
+    assert det.range_m[0] == pytest.approx(15.75) and det.azimuth_rad[0] == pytest.approx(0.0)
+    assert det.radial_speed_mps[0] == pytest.approx(-3.0)  # closing
+    with pytest.raises(ValueError):
+        Radar(RadarParams(), np.random.default_rng(0), mount="roof")
+
+
+def test_velocity_estimate_along_the_road_not_the_turning_ego():
+    """A car straight ahead-left moving at 13 m/s along +x, seen by an ego turned 0.5 rad left:
+    along the ego's heading the estimate is wrong (has a y part); along the road (0 rad) exact."""
+    from sumo_avoid.sensors.perception import perceived_obstacles, velocity_estimate
+
+    ego = ("ego", 0.0, 0.0, 5.0 * math.cos(0.5), 5.0 * math.sin(0.5), 4.0, 1.8)
+    s = snap([ego, ("A", 20.0, 8.0, 13.0, 0.0, 4.5, 1.8)])
+    s = Snapshot(s.time_s, s.ids, s.pos, s.vel, np.array([0.5, 0.0]), s.length, s.width, s.is_ego)
+    det = Radar(RadarParams(**EXACT), np.random.default_rng(0)).scan(s, ["ego"])
+    assert det.n == 1
+    assert abs(velocity_estimate(det)[0, 1]) > 1.0
+    np.testing.assert_allclose(velocity_estimate(det, along=0.0), [[13.0, 0.0]], atol=1e-9)
+    pos, hd, _, _, vel = perceived_obstacles(det, "ego", along=0.0)
+    assert hd.tolist() == [0.0]
+    np.testing.assert_allclose(vel, [[13.0, 0.0]], atol=1e-9)

@@ -38,19 +38,31 @@ def test_radar_brake_without_the_layer_crashes_at_100(tmp_path):
     assert m["collisions"] >= 1
 
 
-# Known failure, kept visible (strict: it must start failing the suite once it is fixed):
-# with APF-SA deciding its escape lane from radar returns only (no ground truth), seed 1 changes
-# lanes at ~2 m/s in front of car2 closing from behind at 13 m/s (t = 65 s, x = 1072 m); a
-# forward radar cannot see it. Needs rear/side sensing or a lane-change gap check on tracks.
-@pytest.mark.parametrize("seed", [
-    pytest.param(1, marks=pytest.mark.xfail(strict=True, reason="forward radar: rear-approaching car2 unseen")),
-    2,
-])
+# Issue acceptance: on radar alone (front radar + tracker memory, no ground truth) APF-SA gets
+# past the six vehicles without contact on each of 10 seeds. Measured: 9/10. Seed 7 is a known
+# failure, kept visible (strict: it must start failing the suite once fixed): at the final approach
+# (t = 94.9 s, x = 1492 m) the ego steers for the goal's lane into car3 driving beside it, in the
+# front radar's blind zone and not in its memory. (radar.rear = true fixes that seed but fails
+# seed 8, see docs/radar.md.) Seed 1 used to pull out in front of car2 closing from behind at
+# 13 m/s: returns were taken to move along the ego's momentary heading; now along the route.
+@pytest.mark.parametrize("seed", [s if s != 7 else pytest.param(7, marks=pytest.mark.xfail(
+    strict=True, reason="front radar: car3 beside the ego in the blind zone")) for s in range(1, 11)])
 def test_overtaking_on_radar_reaches_goal(seed):
     scn = scenario.load(SCN / "overtaking.toml", ['ego.sensor="radar"'], seed=seed)
     m = evaluate.compute(runner.run(scn))
     assert "radar_warnings" in m and "min_danger_time_s" in m
     assert m["goal_reached"] and m["collisions"] == 0
+
+
+def test_overtaking_with_a_rear_radar_too():
+    """The optional rear radar (one fused tracker memory) on the seed that pulled out in front of
+    car2: no contact, and the run logs returns of both mounts."""
+    scn = scenario.load(SCN / "overtaking.toml", ['ego.sensor="radar"', "radar.rear=true",
+                                                   "radar.log_detections=true"], seed=1)
+    res = runner.run(scn)
+    m = evaluate.compute(res)
+    assert m["goal_reached"] and m["collisions"] == 0
+    assert {d.mount for d in res.radar_log} == {"front", "rear"}
 
 
 def test_cut_in_with_layer_no_collision():

@@ -29,7 +29,8 @@ class Observation:
     snapshot: Snapshot
     ego_ids: tuple[str, ...]  # egos to control, in the order of the returned velocities
     obstacles: tuple = field(default=())  # static obstacle polygons, each (k, 2) m
-    # radar scan (sensors.radar.Detections) when ego.sensor = "radar", else None (use the snapshot).
+    # radar scans (a tuple of sensors.radar.Detections, one per mount: front[, rear]) when
+    # ego.sensor = "radar", else None (use the snapshot).
     # With it, controllers take other vehicles and obstacles from it (sensors.perception), never
     # from the snapshot's other rows; Detections.target is for evaluation only.
     detections: object = field(default=None)

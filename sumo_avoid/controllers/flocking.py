@@ -16,7 +16,10 @@ v_shill along the edge's inward normal). The walls are the arena square (set by 
 Obstacles: one shill per obstacle polygon at its nearest boundary point, pointing away from it
 (edge normal on a face, radial at a corner). Static obstacles come from ``Observation.obstacles``;
 other (non-ego) vehicles are moving obstacles (their footprint rectangle) whose shill velocity is
-their own velocity plus v_shill outwards (``vehicles_as_obstacles``). Inside a wall's wrong side
+their own velocity plus v_shill outwards (``vehicles_as_obstacles``). With ``sensor = "radar"``
+(seed 000 + SPEC §4): flock members' states come over V2V within r_c (the neighbour terms, with
+``delay_s`` and noise), everything else from each ego's own radar returns as assumed boxes; a
+return near a member's V2V position is that member (``v2v_gate_m``) and is dropped. Inside a wall's wrong side
 or inside an obstacle the distance is 0 (D = 0: full correction, SPEC §1).
 
 Reference-simulator options (SPEC §1.3): the desired velocity is recomputed every
@@ -32,6 +35,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from ..config import field_doc
+from ..geometry import footprint_corners
 from ..metrics import braking_curve_D as D
 from .base import EgoTask, Observation
 
@@ -74,6 +78,9 @@ class FlockingParams:
     shill_normal_only: bool = field_doc(False, doc="road adaptation (not SPEC): the shill term sees only the velocity "
                                                    "difference along the wall/obstacle normal (default off = eq. 8)")
     vehicles_as_obstacles: bool = field_doc(True, doc="non-ego vehicles are moving obstacles (shill term)")
+    v2v_gate_m: float = field_doc(4.0, doc="sensor = 'radar': a return whose box centre lies this close to a flock "
+                                           "member's V2V position (extrapolated by delay_s) is that member "
+                                           "and is dropped (its V2V state is used), m")
     kdtree_min_agents: int = field_doc(100, doc="use scipy cKDTree for neighbour pairs from this many egos on")
 
     def __post_init__(self):
@@ -334,6 +341,25 @@ class FlockingController:
             nb_vel += self.rng.normal(0.0, p.vel_noise_mps, (e, 2))
         return own_pos, own_vel, nb_pos, nb_vel
 
+    def _radar_others(self, obs: Observation, v2v_pos):
+        """Moving obstacles from the radar (sensor = "radar"): every ego's returns as assumed boxes,
+        minus those associated with a flock member known over V2V (``v2v_gate_m``; no target
+        ids). Returns (corners (B,4,2), velocities (B,2), owner (B,) index into obs.ego_ids)."""
+        from scipy.spatial import cKDTree
+
+        from ..sensors.perception import perceived_boxes
+
+        scans = obs.detections if isinstance(obs.detections, tuple) else (obs.detections,)
+        row_of = {v: k for k, v in enumerate(obs.ego_ids)}
+        parts = [(perceived_boxes(d), np.array([row_of[d.ego_ids[e]] for e in d.ego], dtype=int)) for d in scans]
+        pos, hd, ln, wd, vel = (np.concatenate([b[i] for b, _ in parts]) for i in range(5))
+        owner = np.concatenate([o for _, o in parts])
+        if len(pos) and len(v2v_pos):
+            d, _ = cKDTree(v2v_pos).query(pos, k=1, distance_upper_bound=self.p.v2v_gate_m)
+            keep = ~(d <= self.p.v2v_gate_m)
+            pos, hd, ln, wd, vel, owner = pos[keep], hd[keep], ln[keep], wd[keep], vel[keep], owner[keep]
+        return footprint_corners(pos, hd, ln, wd), vel, owner
+
     def _static_polys(self, obstacles):
         key = tuple(id(o) for o in obstacles)
         if key != self._obs_key:
@@ -344,7 +370,8 @@ class FlockingController:
     def desired(self, own_pos, own_vel, heading, nb_pos, nb_vel, obstacles=(), others=None) -> np.ndarray:
         """Desired velocities (E,2) from sensed states (pure function of its inputs and the walls).
 
-        others: None or (corners (B,4,2), velocities (B,2)) of non-ego vehicles (moving obstacles).
+        others: None or (corners (B,4,2), velocities (B,2)[, owner (B,)]) of non-ego vehicles (moving
+        obstacles); with ``owner`` (radar) ego k only feels the obstacles with owner == k.
         """
         p = self.p
         e = len(own_pos)
@@ -364,6 +391,8 @@ class FlockingController:
             v = v + shill(own_vel, dist, nrm, p)
         if others is not None and len(others[0]):
             dist, nrm = polygon_shills(own_pos, others[0])
+            if len(others) > 2:  # per-ego sensing: ego k only feels the obstacles it perceives
+                dist = np.where(others[2][None, :] == np.arange(e)[:, None], dist, np.inf)
             v_obj = np.broadcast_to(others[1][None], dist.shape + (2,))
             v = v + shill(own_vel, dist, nrm, p, v_obj)
         return combine(v, p)
@@ -376,9 +405,9 @@ class FlockingController:
         rows = obs.ego_rows
         own_pos, own_vel, nb_pos, nb_vel = self._sensed(snap, rows)
         others = None
-        if p.vehicles_as_obstacles:
-            from ..geometry import footprint_corners
-
+        if p.vehicles_as_obstacles and obs.detections is not None:  # radar: each ego its own returns
+            others = self._radar_others(obs, nb_pos + nb_vel * p.delay_s)
+        elif p.vehicles_as_obstacles:
             o = np.flatnonzero(~snap.is_ego)
             if len(o):
                 others = (footprint_corners(snap.pos[o], snap.heading[o], snap.length[o], snap.width[o]),

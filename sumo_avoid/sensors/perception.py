@@ -14,20 +14,22 @@ ASSUMED_LENGTH_M = 4.5
 ASSUMED_WIDTH_M = 1.8
 
 
-def velocity_estimate(det, k=None) -> np.ndarray:
+def velocity_estimate(det, k=None, along=None) -> np.ndarray:
     """(D,2) world velocity of returns ``k`` (all by default), m/s, from their radial speed only.
 
     The tangential component is unobservable in one return; road traffic moves mostly along the
     ego's heading h, so the target is taken to move along h at the speed s that explains the
     measured radial speed: (s h - v_ego) . u = v_r. Exact for parallel traffic and for stationary
     objects (s = 0). Where h . u < 0.3 (more than ~73 degrees off the heading) the radial-only
-    estimate v_ego + v_r u is used instead.
+    estimate v_ego + v_r u is used instead. ``along`` (rad, scalar or per return) replaces h by a
+    better guess of the traffic's direction, e.g. the road's where the ego is: while the ego turns
+    or changes lanes its heading is not the traffic's.
     """
     k = np.arange(det.n) if k is None else k
     e = det.ego[k]
-    h = det.sensor_heading[e]
+    h = det.sensor_heading[e] if along is None else np.broadcast_to(np.asarray(along, float), e.shape)
     hd = np.column_stack([np.cos(h), np.sin(h)])
-    a = h + det.azimuth_rad[k]
+    a = det.sensor_heading[e] + det.azimuth_rad[k]  # line of sight, world frame
     u = np.column_stack([np.cos(a), np.sin(a)])
     vr = det.radial_speed_mps[k]
     ve = det.sensor_vel[e]
@@ -36,32 +38,44 @@ def velocity_estimate(det, k=None) -> np.ndarray:
     return np.where((np.abs(c) >= 0.3)[:, None], along[:, None] * hd, ve + vr[:, None] * u)
 
 
-def perceived_obstacles(det, vid: str, length_m: float = ASSUMED_LENGTH_M, width_m: float = ASSUMED_WIDTH_M):
-    """Obstacles seen by ego ``vid``: (pos (M,2), heading (M,), length (M,), width (M,), vel (M,2))."""
-    k = det.of(vid)
+def perceived_boxes(det, k=None, along=None, length_m: float = ASSUMED_LENGTH_M, width_m: float = ASSUMED_WIDTH_M):
+    """Returns ``k`` (all by default) as assumed boxes: (pos (M,2), heading (M,), length (M,),
+    width (M,), vel (M,2)); ``det.ego[k]`` says whose. Boxes and motion are aligned with ``along``
+    (rad, the traffic's direction) if given, else with the sensor's boresight."""
+    k = np.arange(det.n) if k is None else np.asarray(k, int)
     M = len(k)
     if M == 0:
         z = np.zeros(0)
         return np.zeros((0, 2)), z, z, z, np.zeros((0, 2))
     e = det.ego[k]
-    h = det.sensor_heading[e]
-    a = h + det.azimuth_rad[k]
+    h = det.sensor_heading[e] if along is None else np.full(M, float(along))  # box axis
+    a = det.sensor_heading[e] + det.azimuth_rad[k]  # line of sight, world frame
     u = np.column_stack([np.cos(a), np.sin(a)])
     hd = np.column_stack([np.cos(h), np.sin(h)])
     nd = np.column_stack([-hd[:, 1], hd[:, 0]])
     depth = 0.5 * length_m * np.abs((u * hd).sum(1)) + 0.5 * width_m * np.abs((u * nd).sum(1))
     point = det.sensor_pos[e] + det.range_m[k][:, None] * u
     pos = point + depth[:, None] * u
-    vel = velocity_estimate(det, k)
+    vel = velocity_estimate(det, k, along)
     return pos, h, np.full(M, length_m), np.full(M, width_m), vel
 
 
-def obstacle_vehicles(obs, row: int, q, radius_m: float):
+def perceived_obstacles(det, vid: str, length_m: float = ASSUMED_LENGTH_M, width_m: float = ASSUMED_WIDTH_M,
+                        along: float | None = None):
+    """Obstacles seen by ego ``vid`` (:func:`perceived_boxes` of its returns)."""
+    return perceived_boxes(det, det.of(vid), along, length_m, width_m)
+
+
+def obstacle_vehicles(obs, row: int, q, radius_m: float, along: float | None = None):
     """Other vehicles for the ego at snapshot ``row`` as (pos, heading, length, width, vel):
-    from the radar when ``obs.detections`` is set, else ground truth within ``radius_m`` of q."""
+    from the radar when ``obs.detections`` is set (``along``: see :func:`perceived_obstacles`),
+    else ground truth within ``radius_m`` of q."""
     snap = obs.snapshot
-    if getattr(obs, "detections", None) is not None:
-        return perceived_obstacles(obs.detections, snap.ids[row])
+    scans = getattr(obs, "detections", None)
+    if scans is not None:  # one scan, or one per radar mount (front, rear)
+        parts = [perceived_obstacles(d, snap.ids[row], along=along)
+                 for d in (scans if isinstance(scans, tuple) else (scans,))]
+        return tuple(np.concatenate(x) for x in zip(*parts)) if len(parts) > 1 else parts[0]
     d = np.hypot(*(snap.pos - np.asarray(q, float)).T)
     o = np.flatnonzero((d < radius_m) & (np.arange(snap.n) != row))
     return snap.pos[o], snap.heading[o], snap.length[o], snap.width[o], snap.vel[o]

@@ -1,6 +1,9 @@
 """A forward radar emulator (SPEC §4, seed 004 §1.1), vectorised over egos and targets.
 
-Each ego carries one radar at the centre of its front bumper, boresight along the ego's heading.
+Each ego carries one radar at the centre of its front bumper, boresight along the ego's heading,
+and optionally (``rear = true``) a second one at the rear bumper looking back (another
+:class:`Radar` with ``mount="rear"``, its own scan and memory; the danger-time layer reads only
+the front one).
 Per scan it reports, for every target it can see, one return at the target's nearest visible
 point: its **range**, its **azimuth** (rad, CCW from the boresight) and the **radial speed** (the
 target's velocity relative to the ego projected on the line of sight, m/s; negative = closing).
@@ -57,6 +60,8 @@ class RadarParams:
     false_alarm_rate: float = field_doc(0.0, doc="mean false alarms per scan and ego (Poisson)")
     memory_s: float = field_doc(8.0, doc="controllers also get returns lost from view for this long, coasted (0 = off), s")
     log_detections: bool = field_doc(False, doc="keep every scan's detections (detections.csv)")
+    rear: bool = field_doc(False, doc="also a rear-facing radar at the rear bumper centre, same parameters "
+                                      "(lane-change / blind-spot assist: sees traffic closing from behind)")
 
     def __post_init__(self):
         if self.max_range_m <= 0:
@@ -86,6 +91,7 @@ class Detections:
     azimuth_rad: np.ndarray  # (D,) CCW from the boresight
     radial_speed_mps: np.ndarray  # (D,) relative speed along the line of sight (< 0 closing)
     target: tuple[str, ...] = field(default=())  # (D,) true target id, "" = false alarm. EVALUATION ONLY
+    mount: str = "front"  # which radar: "front" (boresight = heading) or "rear" (boresight = heading + pi)
 
     @property
     def n(self) -> int:
@@ -154,11 +160,17 @@ def _wrap(a):
     return (a + np.pi) % (2 * np.pi) - np.pi
 
 
-class Radar:
-    """Scans every ego's surroundings; stateful only for the update period and the log."""
+MOUNTS = ("front", "rear")
 
-    def __init__(self, params: RadarParams, rng: np.random.Generator):
+
+class Radar:
+    """Scans every ego's surroundings from one mount; stateful only for the update period and the log."""
+
+    def __init__(self, params: RadarParams, rng: np.random.Generator, mount: str = "front"):
+        if mount not in MOUNTS:
+            raise ValueError(f"radar mount must be one of {MOUNTS}")
         self.p = params
+        self.mount = mount
         self.rng = rng
         self._last: Detections | None = None
         self.log: list[Detections] = []
@@ -166,8 +178,9 @@ class Radar:
 
         self.tracker = Tracker(params.memory_s, params.fov_deg, params.max_range_m) if params.memory_s > 0 else None
 
-    def objects(self, det: Detections) -> Detections:
-        """What controllers get: the scan plus remembered returns now out of view (sensors.tracker)."""
+    def objects(self, det):
+        """What controllers get: the scan plus remembered returns now out of view (sensors.tracker).
+        ``det`` may be a tuple (this radar's scan, then other mounts' scans): one fused memory."""
         return self.tracker.update(det) if self.tracker is not None else det
 
     def scan(self, snap, ego_ids, obstacles=(), *, force: bool = False) -> Detections:
@@ -188,8 +201,9 @@ class Radar:
         p = self.p
         rows = np.array([snap.index[v] for v in ego_ids], dtype=int)
         E = len(rows)
-        hd = snap.heading[rows]
-        fwd = np.column_stack([np.cos(hd), np.sin(hd)])
+        sign = 1.0 if self.mount == "front" else -1.0  # rear: at the rear bumper, looking back
+        hd = snap.heading[rows] if sign > 0 else _wrap(snap.heading[rows] + np.pi)
+        fwd = np.column_stack([np.cos(hd), np.sin(hd)])  # the boresight
         spos = snap.pos[rows] + 0.5 * snap.length[rows][:, None] * fwd
         svel = snap.vel[rows]
         # all targets: vehicles (4 corners) and static polygons (padded to K vertices)
@@ -218,7 +232,7 @@ class Radar:
         out = dict(ego=np.zeros(0, int), range_m=empty, azimuth_rad=empty, radial_speed_mps=empty, target=())
         if T:
             out = self._visible(spos, hd, svel, allc[idx], vel[idx], valid, idx, ids)
-        det = Detections(snap.time_s, tuple(ego_ids), spos, hd, svel, **out)
+        det = Detections(snap.time_s, tuple(ego_ids), spos, hd, svel, **out, mount=self.mount)
         return self._imperfect(det)
 
     def _visible(self, spos, hd, svel, poly, tvel, valid, idx, ids) -> dict:
@@ -309,4 +323,4 @@ class Radar:
             a = np.round(a / step) * step
         r = np.clip(r, 0.0, None)
         return Detections(det.time_s, det.ego_ids, det.sensor_pos, det.sensor_heading, det.sensor_vel,
-                          e.astype(int), r, a, v, tgt)
+                          e.astype(int), r, a, v, tgt, det.mount)
