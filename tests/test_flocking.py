@@ -168,6 +168,7 @@ def test_radar_flock_drops_v2v_members_and_keeps_each_egos_own_returns():
     """sensor = "radar": ego a sees member b (dropped: b is known over V2V) and car c; ego b sees
     nothing ahead. Only a feels c's shill (owner mask), and c's box is where the radar put it."""
     from sumo_avoid.controllers.base import Observation
+    from sumo_avoid.sensors.perception import radar_obstacles
     from sumo_avoid.sensors.radar import Radar, RadarParams
     from sumo_avoid.snapshot import Snapshot
 
@@ -178,8 +179,7 @@ def test_radar_flock_drops_v2v_members_and_keeps_each_egos_own_returns():
     det = Radar(RadarParams(range_sigma_m=0, speed_sigma_mps=0, angular_resolution_deg=0, fov_deg=60),
                 np.random.default_rng(0)).scan(snap, ["a", "b"])
     assert sorted(det.target) == ["b", "c"]  # a sees b and c; c is outside b's 60 degree beam
-    ctl = FlockingController(FlockingParams(delay_s=0.0), None, np.random.default_rng(0))
-    corners, v, owner = ctl._radar_others(Observation(snap, ("a", "b"), (), (det,)), pos[:2])
+    corners, v, owner = radar_obstacles(Observation(snap, ("a", "b"), (), (det,)), pos[:2], 4.0)
     assert owner.tolist() == [0]  # only a's return of c is left
     centre = corners[0].mean(axis=0)
     assert np.hypot(*(centre - pos[2])) < 1.0  # the assumed box lands on c (radar: c's nearest corner)

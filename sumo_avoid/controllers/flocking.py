@@ -37,6 +37,7 @@ import numpy as np
 from ..config import field_doc
 from ..geometry import footprint_corners
 from ..metrics import braking_curve_D as D
+from ..sensors.perception import radar_obstacles
 from .base import EgoTask, Observation
 
 # seed Table 3 (GA-optimised values at v_flock = 4 / 6 / 8 m/s). v_max is printed only for
@@ -341,25 +342,6 @@ class FlockingController:
             nb_vel += self.rng.normal(0.0, p.vel_noise_mps, (e, 2))
         return own_pos, own_vel, nb_pos, nb_vel
 
-    def _radar_others(self, obs: Observation, v2v_pos):
-        """Moving obstacles from the radar (sensor = "radar"): every ego's returns as assumed boxes,
-        minus those associated with a flock member known over V2V (``v2v_gate_m``; no target
-        ids). Returns (corners (B,4,2), velocities (B,2), owner (B,) index into obs.ego_ids)."""
-        from scipy.spatial import cKDTree
-
-        from ..sensors.perception import perceived_boxes
-
-        scans = obs.detections if isinstance(obs.detections, tuple) else (obs.detections,)
-        row_of = {v: k for k, v in enumerate(obs.ego_ids)}
-        parts = [(perceived_boxes(d), np.array([row_of[d.ego_ids[e]] for e in d.ego], dtype=int)) for d in scans]
-        pos, hd, ln, wd, vel = (np.concatenate([b[i] for b, _ in parts]) for i in range(5))
-        owner = np.concatenate([o for _, o in parts])
-        if len(pos) and len(v2v_pos):
-            d, _ = cKDTree(v2v_pos).query(pos, k=1, distance_upper_bound=self.p.v2v_gate_m)
-            keep = ~(d <= self.p.v2v_gate_m)
-            pos, hd, ln, wd, vel, owner = pos[keep], hd[keep], ln[keep], wd[keep], vel[keep], owner[keep]
-        return footprint_corners(pos, hd, ln, wd), vel, owner
-
     def _static_polys(self, obstacles):
         key = tuple(id(o) for o in obstacles)
         if key != self._obs_key:
@@ -406,7 +388,7 @@ class FlockingController:
         own_pos, own_vel, nb_pos, nb_vel = self._sensed(snap, rows)
         others = None
         if p.vehicles_as_obstacles and obs.detections is not None:  # radar: each ego its own returns
-            others = self._radar_others(obs, nb_pos + nb_vel * p.delay_s)
+            others = radar_obstacles(obs, nb_pos + nb_vel * p.delay_s, p.v2v_gate_m)
         elif p.vehicles_as_obstacles:
             o = np.flatnonzero(~snap.is_ego)
             if len(o):

@@ -79,3 +79,24 @@ def obstacle_vehicles(obs, row: int, q, radius_m: float, along: float | None = N
     d = np.hypot(*(snap.pos - np.asarray(q, float)).T)
     o = np.flatnonzero((d < radius_m) & (np.arange(snap.n) != row))
     return snap.pos[o], snap.heading[o], snap.length[o], snap.width[o], snap.vel[o]
+
+
+def radar_obstacles(obs, known_pos, gate_m: float):
+    """All egos' returns in ``obs.detections`` as assumed boxes, minus those whose box centre lies
+    within ``gate_m`` of a ``known_pos`` (vehicles known otherwise, e.g. flock members over V2V;
+    no target ids used). Returns (corners (B,4,2), velocities (B,2), owner (B,) index into
+    ``obs.ego_ids``)."""
+    from scipy.spatial import cKDTree
+
+    from ..geometry import footprint_corners
+
+    scans = obs.detections if isinstance(obs.detections, tuple) else (obs.detections,)
+    row_of = {v: k for k, v in enumerate(obs.ego_ids)}
+    parts = [(perceived_boxes(d), np.array([row_of[d.ego_ids[e]] for e in d.ego], dtype=int)) for d in scans]
+    pos, hd, ln, wd, vel = (np.concatenate([b[i] for b, _ in parts]) for i in range(5))
+    owner = np.concatenate([o for _, o in parts])
+    if len(pos) and len(known_pos):
+        d, _ = cKDTree(known_pos).query(pos, k=1, distance_upper_bound=gate_m)
+        keep = ~(d <= gate_m)
+        pos, hd, ln, wd, vel, owner = pos[keep], hd[keep], ln[keep], wd[keep], vel[keep], owner[keep]
+    return footprint_corners(pos, hd, ln, wd), vel, owner
