@@ -86,10 +86,13 @@ def relax(vel, v_des, tau_s: float, max_accel_mps2: float, dt_s: float):
     return vel + acc * dt_s, acc
 
 
-def relaxation_step(pos, vel, heading, v_des, tau_s, max_accel_mps2, dt_s):
+def relaxation_step(pos, vel, heading, v_des, tau_s, max_accel_mps2, dt_s, kick=None):
     """One step for every ego: returns (new centre (E,2), new velocity (E,2), heading (E,), speed (E,)).
-    The heading follows the velocity; a stopped vehicle keeps its heading."""
+    The heading follows the velocity; a stopped vehicle keeps its heading. ``kick`` (E,2): velocity
+    noise added after the relaxation (the reference simulator's outer noise, :mod:`.noise`)."""
     new_vel, _ = relax(vel, v_des, tau_s, max_accel_mps2, dt_s)
+    if kick is not None:
+        new_vel = new_vel + kick
     speed = np.hypot(new_vel[:, 0], new_vel[:, 1])
     head = np.where(speed > 1e-6, np.arctan2(new_vel[:, 1], new_vel[:, 0]), np.asarray(heading, float))
     return np.asarray(pos, float) + new_vel * dt_s, new_vel, head, speed

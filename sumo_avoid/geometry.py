@@ -22,6 +22,9 @@ __all__ = [
     "convex_distance",
     "point_segment_distance",
     "pairwise_footprint_distance",
+    "ccw_polygon",
+    "pad_polygons",
+    "ring_walls",
 ]
 
 
@@ -278,3 +281,32 @@ def pairwise_footprint_distance(corners_a, corners_b) -> np.ndarray:
     Q = np.tile(cb, (A, 1, 1))
     d, _, _ = convex_distance(P, Q)
     return d.reshape(A, B)
+
+
+def ccw_polygon(points) -> np.ndarray:
+    """The polygon's vertices (k,2) in counter-clockwise order (reversed if given clockwise)."""
+    pts = np.asarray(points, float).reshape(-1, 2)
+    x, y = pts[:, 0], pts[:, 1]
+    area2 = float((x * np.roll(y, -1) - np.roll(x, -1) * y).sum())
+    return pts[::-1].copy() if area2 < 0 else pts.copy()
+
+
+def pad_polygons(polys) -> np.ndarray:
+    """Polygons of different vertex counts as one (P,K,2) CCW array, padded by repeating the last vertex."""
+    polys = [ccw_polygon(pg) for pg in polys]
+    k = max(len(pg) for pg in polys)
+    return np.stack([np.vstack([pg, np.repeat(pg[-1:], k - len(pg), 0)]) for pg in polys])
+
+
+def ring_walls(rings):
+    """Segments and inward normals of an allowed area given as rings, each oriented so that the area
+    lies to its left (exterior CCW, holes CW). Returns (a, b, inward)."""
+    a = np.concatenate([np.asarray(r, float)[:-1] if np.allclose(r[0], r[-1]) else np.asarray(r, float)
+                        for r in rings])
+    b = np.concatenate([np.roll(np.asarray(r, float)[:-1] if np.allclose(r[0], r[-1]) else np.asarray(r, float),
+                                -1, axis=0) for r in rings])
+    d = b - a
+    keep = np.hypot(d[:, 0], d[:, 1]) > 1e-9
+    a, b, d = a[keep], b[keep], d[keep]
+    inward = np.stack([-d[:, 1], d[:, 0]], -1) / np.hypot(d[:, 0], d[:, 1])[:, None]
+    return a, b, inward

@@ -13,6 +13,7 @@ import pandas as pd
 
 from .actuator import Motion, actuate
 from .arena import relaxation_step
+from .noise import velocity_kick
 from .controllers import make_controller
 from .controllers.base import EgoTask, Observation
 from .recorder import Recorder
@@ -76,6 +77,7 @@ def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
     obstacles = tuple(np.asarray(o.shape, float) for o in spec.obstacles)
     uses_goals = getattr(controller, "uses_goals", True)
     relax_mode = spec.actuator.mode == "relaxation"
+    outer = np.random.default_rng([spec.sim.seed, 7])  # own stream: actuation noise (sumo_avoid.noise)
     vel_state: dict[str, np.ndarray] = {}  # relaxation mode: ego id -> 2-D velocity, m/s
     walls = None
     goals: dict[str, tuple[float, float]] = {}
@@ -146,9 +148,11 @@ def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
                     v_des = v_lim if spec.ego.safety == "danger_time" else v_des
                 if relax_mode:
                     vel0 = np.array([vel_state[v] if v in vel_state else snap.vel[snap.index[v]] for v in present])
+                    kick = (velocity_kick(outer, spec.actuator.outer_noise_m2ps3, dt, len(present))
+                            if spec.actuator.outer_noise_m2ps3 > 0 else None)
                     pos1, vel1, head1, speed1 = relaxation_step(snap.pos[rows], vel0, snap.heading[rows], v_des,
                                                                 spec.actuator.tau_s,
-                                                                spec.actuator.relax_max_accel_mps2, dt)
+                                                                spec.actuator.relax_max_accel_mps2, dt, kick)
                     vel_state.update(zip(present, vel1))
                     motion = Motion(pos1, head1, speed1)
                 else:

@@ -68,12 +68,17 @@ class ActuatorConfig:
                                            "reference: dv/dt = (v_des - v)/tau, |dv/dt| <= relax_max_accel)")
     tau_s: float = field_doc(1.0, doc="relaxation mode: velocity time constant tau, s")
     relax_max_accel_mps2: float = field_doc(6.0, doc="relaxation mode: acceleration cap, m/s^2")
+    outer_noise_m2ps3: float = field_doc(0.0, doc="relaxation mode: reference simulator's 'outer' noise on the "
+                                                  "actual motion, sigma in m^2/s^3 (robotsim: 0.2; 0 = off; "
+                                                  "sumo_avoid/noise.py)")
 
     def __post_init__(self):
         if self.mode not in ("kinematic", "relaxation"):
             raise ValueError("actuator.mode must be 'kinematic' or 'relaxation'")
         if self.tau_s <= 0:
             raise ValueError("actuator.tau_s > 0")
+        if self.outer_noise_m2ps3 < 0:
+            raise ValueError("actuator.outer_noise_m2ps3 >= 0")
 
 
 @dataclass(frozen=True)

@@ -24,19 +24,23 @@ or inside an obstacle the distance is 0 (D = 0: full correction, SPEC §1).
 
 Reference-simulator options (SPEC §1.3): the desired velocity is recomputed every
 ``update_period_s``; neighbours' states can arrive ``delay_s`` late; own and neighbours' positions
-and velocities can carry Gaussian noise. The velocity relaxation itself is the actuator's job
+and velocities can carry Gaussian noise and/or the reference simulator's drifting GPS error
+(``gps_sigma_m2ps2``, :mod:`sumo_avoid.noise`). The velocity relaxation itself is the actuator's job
 (``actuator.mode = "relaxation"``, :mod:`sumo_avoid.arena`).
 """
 from __future__ import annotations
 
 import collections
+import math
 from dataclasses import dataclass, fields
 
 import numpy as np
 
 from ..config import field_doc
 from ..geometry import footprint_corners
+from ..geometry import ccw_polygon, pad_polygons, ring_walls
 from ..metrics import braking_curve_D as D
+from ..noise import DampedRandomWalk
 from ..sensors.perception import radar_obstacles
 from .base import EgoTask, Observation
 
@@ -76,6 +80,10 @@ class FlockingParams:
     delay_s: float = field_doc(0.0, doc="neighbours' states arrive this late, s")
     pos_noise_m: float = field_doc(0.0, doc="std of Gaussian noise on sensed positions, m")
     vel_noise_mps: float = field_doc(0.0, doc="std of Gaussian noise on sensed velocities, m/s")
+    gps_sigma_m2ps2: float = field_doc(0.0, doc="reference simulator's GPS error (damped random walk per vehicle on "
+                                                "sensed own and neighbour states), sigma m^2/s^2 (robotsim: 0.005; "
+                                                "0 = off; sumo_avoid/noise.py)")
+    gps_lambda_ps: float = field_doc(0.1, doc="GPS error damping lambda, 1/s")
     shill_normal_only: bool = field_doc(False, doc="road adaptation (not SPEC): the shill term sees only the velocity "
                                                    "difference along the wall/obstacle normal (default off = eq. 8)")
     vehicles_as_obstacles: bool = field_doc(True, doc="non-ego vehicles are moving obstacles (shill term)")
@@ -229,33 +237,6 @@ def combine(v_tilde, p: FlockingParams):
     return u * speed[:, None]
 
 
-def ccw_polygon(points) -> np.ndarray:
-    pts = np.asarray(points, float).reshape(-1, 2)
-    x, y = pts[:, 0], pts[:, 1]
-    area2 = float((x * np.roll(y, -1) - np.roll(x, -1) * y).sum())
-    return pts[::-1].copy() if area2 < 0 else pts.copy()
-
-
-def pad_polygons(polys) -> np.ndarray:
-    polys = [ccw_polygon(pg) for pg in polys]
-    k = max(len(pg) for pg in polys)
-    return np.stack([np.vstack([pg, np.repeat(pg[-1:], k - len(pg), 0)]) for pg in polys])
-
-
-def ring_walls(rings):
-    """Segments and inward normals of an allowed area given as rings, each oriented so that the area
-    lies to its left (exterior CCW, holes CW). Returns (a, b, inward)."""
-    a = np.concatenate([np.asarray(r, float)[:-1] if np.allclose(r[0], r[-1]) else np.asarray(r, float)
-                        for r in rings])
-    b = np.concatenate([np.roll(np.asarray(r, float)[:-1] if np.allclose(r[0], r[-1]) else np.asarray(r, float),
-                                -1, axis=0) for r in rings])
-    d = b - a
-    keep = _norm(d) > 1e-9
-    a, b, d = a[keep], b[keep], d[keep]
-    inward = np.stack([-d[:, 1], d[:, 0]], -1) / _norm(d)[:, None]
-    return a, b, inward
-
-
 # ------------------------------------------------------------------------------ controller
 class FlockingController:
     """Vásárhelyi flocking (SPEC §1): repulsion, alignment, walls and obstacles as shill agents."""
@@ -276,6 +257,8 @@ class FlockingController:
         self._cache: dict[str, np.ndarray] = {}
         self._obs_key = None
         self._obs_polys = None
+        self._gps: DampedRandomWalk | None = None
+        self._gps_time = -math.inf
         self.updates = 0
 
     # --- walls ---------------------------------------------------------------------------------
@@ -334,6 +317,15 @@ class FlockingController:
             have = r0 >= 0
             nb_pos = np.where(have[:, None], pos0[np.maximum(r0, 0)], own_pos)
             nb_vel = np.where(have[:, None], vel0[np.maximum(r0, 0)], own_vel)
+        if p.gps_sigma_m2ps2 > 0:  # the reference simulator's drifting GPS error (sumo_avoid.noise)
+            if self._gps is None:
+                self._gps = DampedRandomWalk(p.gps_sigma_m2ps2, p.gps_lambda_ps, self.rng)
+            keys = [snap.ids[r] for r in rows_now]
+            dt = max(p.update_period_s, snap.time_s - self._gps_time if math.isfinite(self._gps_time) else 0.0)
+            self._gps_time = snap.time_s
+            x, u = self._gps.step([(k, 0) for k in keys] + [(k, 1) for k in keys], dt)
+            e = len(rows_now)
+            own_pos, own_vel, nb_pos, nb_vel = own_pos + x[:e], own_vel + u[:e], nb_pos + x[e:], nb_vel + u[e:]
         if p.pos_noise_m > 0 or p.vel_noise_mps > 0:
             e = len(rows_now)
             own_pos += self.rng.normal(0.0, p.pos_noise_m, (e, 2))
