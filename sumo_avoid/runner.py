@@ -5,6 +5,7 @@ afterwards (:mod:`sumo_avoid.evaluate`) and never feed back into the run.
 """
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field, replace
 
@@ -13,11 +14,11 @@ import pandas as pd
 
 from .actuator import Motion, actuate
 from .arena import relaxation_step
-from .noise import velocity_kick
 from .controllers import make_controller
 from .controllers.base import EgoTask, Observation
+from .noise import velocity_kick
 from .recorder import Recorder
-from .road import Road
+from .road import Road, polyline_point_at, polyline_project
 from .safety import DangerTimeLayer
 from .scenario import Scenario
 from .sensors.radar import Radar
@@ -57,6 +58,18 @@ def _with_velocities(snap, vel_state: dict):
     return replace(snap, vel=vel)
 
 
+def route_directions(paths, pos, heading) -> np.ndarray:
+    """(E,) rad: each ego's route direction where it is (its heading if it has no route path)."""
+    out = np.asarray(heading, float).copy()
+    for k, path in enumerate(paths):
+        if path is not None and len(path) > 1:
+            s = polyline_project(path, pos[k])
+            d = polyline_point_at(path, s + 1.0) - polyline_point_at(path, s)
+            if np.hypot(*d) > 1e-9:
+                out[k] = math.atan2(d[1], d[0])
+    return out
+
+
 def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
     spec = scn.spec
     t_start = time.perf_counter()
@@ -77,6 +90,7 @@ def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
     obstacles = tuple(np.asarray(o.shape, float) for o in spec.obstacles)
     uses_goals = getattr(controller, "uses_goals", True)
     relax_mode = spec.actuator.mode == "relaxation"
+    paths: dict[str, np.ndarray] = {}  # ego id -> route reference path (traffic direction for the tracker)
     outer = np.random.default_rng([spec.sim.seed, 7])  # own stream: actuation noise (sumo_avoid.noise)
     vel_state: dict[str, np.ndarray] = {}  # relaxation mode: ego id -> 2-D velocity, m/s
     walls = None
@@ -112,6 +126,7 @@ def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
                 if uses_goals:
                     goals[vid] = (float(goal[0]), float(goal[1]))
                 controller.add_ego(EgoTask(vid, goal, path, spec.ego.cruise_speed_mps))
+                paths[vid] = path
                 active[vid] = np.nan
             snap = sim.read()
             if vel_state:  # SUMO's reported speed of an off-lane vehicle is unreliable: use the actuator's
@@ -139,8 +154,9 @@ def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
                 det = radar.scan(snap, present, obstacles) if radar is not None else None
                 seen = None
                 if spec.ego.sensor == "radar":  # with a rear radar: one fused memory (sensors.tracker)
-                    seen = (radar.objects(det) if rear is None
-                            else radar.objects((det, rear.scan(snap, present, obstacles))))
+                    along = route_directions([paths.get(v) for v in present], snap.pos[rows], snap.heading[rows])
+                    seen = (radar.objects(det, along) if rear is None
+                            else radar.objects((det, rear.scan(snap, present, obstacles)), along))
                     seen = seen if isinstance(seen, tuple) else (seen,)
                 v_des = controller.act(Observation(snap, tuple(present), obstacles, seen))
                 if layer is not None:

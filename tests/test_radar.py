@@ -255,3 +255,34 @@ def test_velocity_estimate_along_the_road_not_the_turning_ego():
     pos, hd, _, _, vel = perceived_obstacles(det, "ego", along=0.0)
     assert hd.tolist() == [0.0]
     np.testing.assert_allclose(vel, [[13.0, 0.0]], atol=1e-9)
+
+
+def test_tracker_coasts_along_the_given_traffic_direction():
+    """The ego is turned 0.3 rad left; car A ahead drives along +x at 8 m/s. Coasted along the
+    ego's heading its track drifts sideways; along the route (0 rad) it stays in A's lane."""
+    from sumo_avoid.sensors.tracker import Tracker
+
+    ego = ("ego", 0.0, 0.0, 10.0 * math.cos(0.3), 10.0 * math.sin(0.3), 4.0, 1.8)
+    s0 = snap([ego, ("A", 14.25, 3.5, 8.0, 0.0, 4.5, 1.8)], t=0.0)
+    s0 = Snapshot(s0.time_s, s0.ids, s0.pos, s0.vel, np.array([0.3, 0.0]), s0.length, s0.width, s0.is_ego)
+    det = Radar(RadarParams(memory_s=5.0, **EXACT), np.random.default_rng(0)).scan(s0, ["ego"])
+    assert det.n == 1
+    y0 = det.points()[0, 1]
+    # 3 s later the ego is far to the left (nothing in view): only the coasted track is reported
+    s1 = snap([("ego", 0.0, 60.0, 10.0, 0.0, 4.0, 1.8)], t=3.0)
+    for along, sideways in ((np.array([0.0]), False), (None, True)):
+        tr = Tracker(5.0, 90.0, 100.0)
+        tr.update(det, along)
+        out = tr.update(Radar(RadarParams(**EXACT), np.random.default_rng(0)).scan(s1, ["ego"]), along)
+        assert out.n == 1
+        drift = abs(out.points()[0, 1] - y0)
+        assert (drift > 1.0) if sideways else drift == pytest.approx(0.0, abs=1e-9)
+
+
+def test_route_directions_hand_values():
+    from sumo_avoid.runner import route_directions
+
+    path = np.array([[0.0, 0.0], [100.0, 0.0], [100.0, 100.0]])
+    d = route_directions([path, None, path], np.array([[50.0, 2.0], [0.0, 0.0], [100.0, 50.0]]),
+                         np.array([0.1, 0.2, 0.3]))
+    np.testing.assert_allclose(d, [0.0, 0.2, math.pi / 2])

@@ -178,10 +178,11 @@ class Radar:
 
         self.tracker = Tracker(params.memory_s, params.fov_deg, params.max_range_m) if params.memory_s > 0 else None
 
-    def objects(self, det):
+    def objects(self, det, along=None):
         """What controllers get: the scan plus remembered returns now out of view (sensors.tracker).
-        ``det`` may be a tuple (this radar's scan, then other mounts' scans): one fused memory."""
-        return self.tracker.update(det) if self.tracker is not None else det
+        ``det`` may be a tuple (this radar's scan, then other mounts' scans): one fused memory.
+        ``along`` (E,) rad: the traffic's direction at each ego (its route), for coasting."""
+        return self.tracker.update(det, along) if self.tracker is not None else det
 
     def scan(self, snap, ego_ids, obstacles=(), *, force: bool = False) -> Detections:
         """Detections of the egos ``ego_ids`` in ``snap``; static ``obstacles`` are (k,2) polygons."""

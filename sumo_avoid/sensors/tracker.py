@@ -47,7 +47,7 @@ class Tracker:
         self._t = np.zeros(0)  # time last seen, s
         self._scan_time = -math.inf
 
-    def update(self, det):
+    def update(self, det, along=None):
         """Fold in a scan (a held scan changes nothing) and return current + coasted returns.
 
         ``det`` is one :class:`Detections` or a tuple of them, one per radar mount of the same egos
@@ -67,7 +67,10 @@ class Tracker:
         if now > self._scan_time:
             self._scan_time = now
             p_new = np.concatenate([d.points() for d in scans])
-            v_new = np.concatenate([velocity_estimate(d) for d in scans])
+            # coasting velocity: motion along the traffic's direction at the ego if known (the route),
+            # else along the sensor's boresight
+            v_new = np.concatenate([velocity_estimate(d, along=None if along is None else np.asarray(along)[d.ego])
+                                    for d in scans])
             e_new = np.concatenate([d.ego for d in scans])
             keep = now - self._t <= self.memory_s
             for d in scans:  # should be seen now by this radar: trust its scan
