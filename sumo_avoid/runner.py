@@ -5,7 +5,6 @@ afterwards (:mod:`sumo_avoid.evaluate`) and never feed back into the run.
 """
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field, replace
 
@@ -18,7 +17,7 @@ from .controllers import make_controller
 from .controllers.base import EgoTask, Observation
 from .noise import velocity_kick
 from .recorder import Recorder
-from .road import Road, polyline_point_at, polyline_project
+from .road import Road
 from .safety import DangerTimeLayer
 from .scenario import Scenario
 from .sensors.radar import Radar
@@ -59,14 +58,27 @@ def _with_velocities(snap, vel_state: dict):
 
 
 def route_directions(paths, pos, heading) -> np.ndarray:
-    """(E,) rad: each ego's route direction where it is (its heading if it has no route path)."""
+    """(E,) rad: direction of the segment of each ego's route path nearest to it (its heading if it
+    has no path). Vectorised over egos: paths padded to one (E, S) segment array."""
     out = np.asarray(heading, float).copy()
-    for k, path in enumerate(paths):
-        if path is not None and len(path) > 1:
-            s = polyline_project(path, pos[k])
-            d = polyline_point_at(path, s + 1.0) - polyline_point_at(path, s)
-            if np.hypot(*d) > 1e-9:
-                out[k] = math.atan2(d[1], d[0])
+    ok = [k for k, p in enumerate(paths) if p is not None and len(p) > 1]
+    if not ok:
+        return out
+    S = max(len(paths[k]) - 1 for k in ok)
+    a = np.full((len(ok), S, 2), np.nan)
+    b = np.full((len(ok), S, 2), np.nan)
+    for i, k in enumerate(ok):
+        p = np.asarray(paths[k], float)
+        a[i, :len(p) - 1], b[i, :len(p) - 1] = p[:-1], p[1:]
+    ab = b - a
+    rel = np.asarray(pos, float)[ok][:, None, :] - a
+    L2 = (ab**2).sum(-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.clip((rel * ab).sum(-1) / L2, 0.0, 1.0)
+    d2 = ((rel - t[..., None] * ab) ** 2).sum(-1)
+    d2 = np.where(np.isfinite(d2) & (L2 > 1e-18), d2, np.inf)
+    seg = np.take_along_axis(ab, d2.argmin(axis=1)[:, None, None], axis=1)[:, 0]
+    out[ok] = np.arctan2(seg[:, 1], seg[:, 0])
     return out
 
 
