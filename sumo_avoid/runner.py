@@ -102,7 +102,7 @@ def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
     obstacles = tuple(np.asarray(o.shape, float) for o in spec.obstacles)
     uses_goals = getattr(controller, "uses_goals", True)
     relax_mode = spec.actuator.mode == "relaxation"
-    paths: dict[str, np.ndarray] = {}  # ego id -> route reference path (traffic direction for the tracker)
+    paths: dict[str, np.ndarray] = {}  # ego id -> route reference path (traffic direction with radar)
     outer = np.random.default_rng([spec.sim.seed, 7])  # own stream: actuation noise (sumo_avoid.noise)
     vel_state: dict[str, np.ndarray] = {}  # relaxation mode: ego id -> 2-D velocity, m/s
     walls = None
@@ -164,13 +164,13 @@ def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
                 speed = np.array([active[v] for v in present])
                 speed = np.where(np.isnan(speed), snap.speed[rows], speed)
                 det = radar.scan(snap, present, obstacles) if radar is not None else None
-                seen = None
+                seen = along = None
                 if spec.ego.sensor == "radar":  # with a rear radar: one fused memory (sensors.tracker)
                     along = route_directions([paths.get(v) for v in present], snap.pos[rows], snap.heading[rows])
                     seen = (radar.objects(det, along) if rear is None
                             else radar.objects((det, rear.scan(snap, present, obstacles)), along))
                     seen = seen if isinstance(seen, tuple) else (seen,)
-                v_des = controller.act(Observation(snap, tuple(present), obstacles, seen))
+                v_des = controller.act(Observation(snap, tuple(present), obstacles, seen, along))
                 if layer is not None:
                     v_lim, _ = layer.apply(v_des, det, snap.width[rows], speed, dt)
                     v_des = v_lim if spec.ego.safety == "danger_time" else v_des

@@ -21,7 +21,6 @@ Per ego and step:
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -122,18 +121,6 @@ class ApfController:
             point = point + lateral_offset * np.array([-t[1], t[0]])
         return point
 
-    def others(self, obs: Observation, row: int, q):
-        """Other vehicles as the ego perceives them (sensors.perception); radar returns are taken
-        to move along the route's direction at the ego, not along its momentary heading."""
-        vid = obs.snapshot.ids[row]
-        along = None
-        if getattr(obs, "detections", None) is not None and vid in self.tasks:
-            path = self.tasks[vid].path
-            s = polyline_project(path, obs.snapshot.pos[row])
-            t, _ = _unit(polyline_point_at(path, s + 1.0) - polyline_point_at(path, s))
-            along = math.atan2(t[1], t[0])
-        return obstacle_vehicles(obs, row, q, self.p.sense_radius_m, along)
-
     # --- the field -------------------------------------------------------------------------
     def field(self, obs: Observation, row: int, q_cand: np.ndarray, target: np.ndarray,
               heading: float | None = None) -> Field:
@@ -150,7 +137,7 @@ class ApfController:
         ego_corners = footprint_corners(q_cand, np.full(C, h), np.full(C, L), np.full(C, W))  # (C,4,2)
 
         # other vehicles within the sensing radius
-        o_pos, o_hd, o_len, o_wid, o_vel = self.others(obs, row, q_cand[0])
+        o_pos, o_hd, o_len, o_wid, o_vel = obstacle_vehicles(obs, row, q_cand[0], p.sense_radius_m)
         v_safe = np.inf
         if len(o_pos):
             oc = footprint_corners(o_pos, o_hd, o_len, o_wid)

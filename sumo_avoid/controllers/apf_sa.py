@@ -29,6 +29,7 @@ import numpy as np
 from ..config import field_doc
 from ..geometry import footprint_corners, point_segment_distance
 from ..road import polyline_point_at, polyline_project
+from ..sensors.perception import obstacle_vehicles
 from .apf import ApfController, ApfParams, _unit
 from .base import EgoTask, Observation
 
@@ -179,7 +180,7 @@ class ApfSaController(ApfController):
         h = snap.heading[row] if heading is None else heading
         pos = snap.pos[row] if at is None else at
         # what the ego perceives (radar + tracker when the sensor is on, else ground truth)
-        o_pos, o_hd, o_len, o_wid, _ = self.others(obs, row, snap.pos[row])
+        o_pos, o_hd, o_len, o_wid, _ = obstacle_vehicles(obs, row, snap.pos[row], self.p.sense_radius_m)
         if not len(o_pos):
             return math.inf
         hd = np.array([math.cos(h), math.sin(h)])

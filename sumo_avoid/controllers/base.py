@@ -34,6 +34,9 @@ class Observation:
     # With it, controllers take other vehicles and obstacles from it (sensors.perception), never
     # from the snapshot's other rows; Detections.target is for evaluation only.
     detections: object = field(default=None)
+    # with radar: (E,) rad, aligned with ego_ids, the traffic's direction at each ego (its route's
+    # nearest segment); radar returns are taken to move along it (sensors.perception)
+    route_heading: object = field(default=None)
 
     @property
     def ego_rows(self) -> np.ndarray:

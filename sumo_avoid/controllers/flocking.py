@@ -37,8 +37,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from ..config import field_doc
-from ..geometry import footprint_corners
-from ..geometry import ccw_polygon, pad_polygons, ring_walls
+from ..geometry import ccw_polygon, footprint_corners, pad_polygons, ring_walls
 from ..metrics import braking_curve_D as D
 from ..noise import DampedRandomWalk
 from ..sensors.perception import radar_obstacles

@@ -66,13 +66,15 @@ def perceived_obstacles(det, vid: str, length_m: float = ASSUMED_LENGTH_M, width
     return perceived_boxes(det, det.of(vid), along, length_m, width_m)
 
 
-def obstacle_vehicles(obs, row: int, q, radius_m: float, along: float | None = None):
+def obstacle_vehicles(obs, row: int, q, radius_m: float):
     """Other vehicles for the ego at snapshot ``row`` as (pos, heading, length, width, vel):
-    from the radar when ``obs.detections`` is set (``along``: see :func:`perceived_obstacles`),
-    else ground truth within ``radius_m`` of q."""
+    from the radar when ``obs.detections`` is set (moving along ``obs.route_heading`` of that ego
+    if given, see :func:`perceived_boxes`), else ground truth within ``radius_m`` of q."""
     snap = obs.snapshot
     scans = getattr(obs, "detections", None)
     if scans is not None:  # one scan, or one per radar mount (front, rear)
+        route = getattr(obs, "route_heading", None)
+        along = None if route is None else float(route[obs.ego_ids.index(snap.ids[row])])
         parts = [perceived_obstacles(d, snap.ids[row], along=along)
                  for d in (scans if isinstance(scans, tuple) else (scans,))]
         return tuple(np.concatenate(x) for x in zip(*parts)) if len(parts) > 1 else parts[0]
