@@ -57,22 +57,29 @@ def _with_velocities(snap, vel_state: dict):
     return replace(snap, vel=vel)
 
 
-def route_directions(paths, pos, heading) -> np.ndarray:
-    """(E,) rad: direction of the segment of each ego's route path nearest to it (its heading if it
-    has no path). Vectorised over egos: paths padded to one (E, S) segment array."""
-    out = np.asarray(heading, float).copy()
+def route_segments(paths):
+    """The egos' route paths as padded segment arrays for :func:`route_directions`: (rows with a
+    path, segment starts (P, S, 2), segment vectors (P, S, 2), squared lengths (P, S)); NaN pads."""
     ok = [k for k, p in enumerate(paths) if p is not None and len(p) > 1]
-    if not ok:
-        return out
-    S = max(len(paths[k]) - 1 for k in ok)
+    S = max([len(paths[k]) - 1 for k in ok], default=0)
     a = np.full((len(ok), S, 2), np.nan)
     b = np.full((len(ok), S, 2), np.nan)
     for i, k in enumerate(ok):
         p = np.asarray(paths[k], float)
         a[i, :len(p) - 1], b[i, :len(p) - 1] = p[:-1], p[1:]
     ab = b - a
+    return ok, a, ab, (ab**2).sum(-1)
+
+
+def route_directions(paths, pos, heading, segments=None) -> np.ndarray:
+    """(E,) rad: direction of the segment of each ego's route path nearest to it (its heading if it
+    has no path). Vectorised over egos: paths padded to one (E, S) segment array, which a caller
+    may pass in precomputed (``segments = route_segments(paths)``) while the egos stay the same."""
+    out = np.asarray(heading, float).copy()
+    ok, a, ab, L2 = route_segments(paths) if segments is None else segments
+    if not ok:
+        return out
     rel = np.asarray(pos, float)[ok][:, None, :] - a
-    L2 = (ab**2).sum(-1)
     with np.errstate(invalid="ignore", divide="ignore"):
         t = np.clip((rel * ab).sum(-1) / L2, 0.0, 1.0)
     d2 = ((rel - t[..., None] * ab) ** 2).sum(-1)
@@ -103,6 +110,7 @@ def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
     uses_goals = getattr(controller, "uses_goals", True)
     relax_mode = spec.actuator.mode == "relaxation"
     paths: dict[str, np.ndarray] = {}  # ego id -> route reference path (traffic direction with radar)
+    seg_key, segs = None, None  # route_segments() of the egos in seg_key
     outer = np.random.default_rng([spec.sim.seed, 7])  # own stream: actuation noise (sumo_avoid.noise)
     vel_state: dict[str, np.ndarray] = {}  # relaxation mode: ego id -> 2-D velocity, m/s
     walls = None
@@ -110,7 +118,8 @@ def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
     active: dict[str, float] = {}  # ego id -> signed speed held by the actuator, m/s
     finished: set[str] = set()
     args = sumo_args(scn.net_file, scn.route_files, scn.additional_files, spec.sim.step_s, spec.sim.seed,
-                     spec.sim.lateral_resolution_m, log_file, sumo_collisions=arena is None)
+                     spec.sim.lateral_resolution_m, log_file,
+                     sumo_collisions=spec.sim.sumo_collisions and arena is None)
     t_loop = time.perf_counter()
     step = 0
     with SumoSim(args) as sim:
@@ -166,7 +175,9 @@ def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
                 det = radar.scan(snap, present, obstacles) if radar is not None else None
                 seen = along = None
                 if spec.ego.sensor == "radar":  # with a rear radar: one fused memory (sensors.tracker)
-                    along = route_directions([paths.get(v) for v in present], snap.pos[rows], snap.heading[rows])
+                    if seg_key != present:  # the padded route segments only change with the egos
+                        seg_key, segs = list(present), route_segments([paths.get(v) for v in present])
+                    along = route_directions(None, snap.pos[rows], snap.heading[rows], segs)
                     seen = (radar.objects(det, along) if rear is None
                             else radar.objects((det, rear.scan(snap, present, obstacles)), along))
                     seen = seen if isinstance(seen, tuple) else (seen,)

@@ -31,6 +31,9 @@ class SimConfig:
     duration_s: float = field_doc(120.0, doc="time limit of the run, s")
     seed: int = field_doc(1, doc="seed for SUMO and for the plug-in's random numbers")
     lateral_resolution_m: float = field_doc(0.8, doc="SUMO sublane width, m (sublane model on)")
+    sumo_collisions: bool = field_doc(True, doc="SUMO's own collision check and output beside the plug-in's "
+                                                "footprint check (always on); off saves SUMO's pairwise per-lane "
+                                                "check (always off in an [arena])")
 
     def __post_init__(self):
         if self.step_s <= 0 or self.duration_s <= 0:

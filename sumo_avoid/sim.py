@@ -85,6 +85,8 @@ class SumoSim:
         libsumo.simulation.subscribe(list(_SIM_VARS))
         self._dims: dict[str, tuple[float, float]] = {}  # id -> (length, width), static
         self._egos: set[str] = set()
+        self._static_ids: tuple[str, ...] | None = None  # read(): the ids the cached static arrays belong to
+        self._static = (np.zeros((0, 2)), np.zeros(0, bool))
         self._subscribe_new(libsumo.vehicle.getIDList())
 
     # --- reading ---------------------------------------------------------------------------
@@ -97,18 +99,24 @@ class SumoSim:
     def read(self) -> Snapshot:
         """The world now, as an immutable snapshot (centres, math headings)."""
         res = libsumo.vehicle.getAllSubscriptionResults()
-        ids = tuple(v for v in res if v in self._dims)  # libsumo keeps a previous run's results until a step
+        dims_of = self._dims
+        ids = tuple(v for v in res if v in dims_of)  # libsumo keeps a previous run's results until a step
         n = len(ids)
         if n == 0:
             return Snapshot.empty(self.time_s)
+        if ids != self._static_ids:  # lengths, widths and ego flags only change with the vehicle set
+            self._static_ids = ids
+            self._static = (np.array([dims_of[v] for v in ids], dtype=float),
+                            np.array([v in self._egos for v in ids], dtype=bool))
+        dims, is_ego = self._static
         c = libsumo.constants
-        front = np.array([res[v][c.VAR_POSITION] for v in ids], dtype=float)
-        heading = np.radians(90.0 - np.array([res[v][c.VAR_ANGLE] for v in ids], dtype=float))
-        speed = np.array([res[v][c.VAR_SPEED] for v in ids], dtype=float)
-        dims = np.array([self._dims[v] for v in ids], dtype=float)
+        P, A, S = c.VAR_POSITION, c.VAR_ANGLE, c.VAR_SPEED
+        rows = [res[v] for v in ids]
+        front = np.array([r[P] for r in rows], dtype=float)
+        heading = np.radians(90.0 - np.fromiter((r[A] for r in rows), float, n))
+        speed = np.fromiter((r[S] for r in rows), float, n)
         direction = np.column_stack([np.cos(heading), np.sin(heading)])
         centre = front - direction * (dims[:, :1] / 2.0)
-        is_ego = np.array([v in self._egos for v in ids], dtype=bool)
         return Snapshot(self.time_s, ids, centre, direction * speed[:, None], heading,
                         dims[:, 0], dims[:, 1], is_ego)
 
@@ -128,22 +136,28 @@ class SumoSim:
         libsumo.vehicle.setSpeedMode(vid, EGO_SPEED_MODE)
         libsumo.vehicle.setLaneChangeMode(vid, EGO_LANE_CHANGE_MODE)
         self._egos.add(vid)
+        self._static_ids = None
         return EgoInfo(vid, tuple(libsumo.vehicle.getRoute(vid)), libsumo.vehicle.getLaneIndex(vid))
 
     def apply(self, ids, centre: np.ndarray, heading: np.ndarray, speed: np.ndarray) -> None:
         """Place each ego exactly (off-lane allowed, also inside junctions): moveToXY keepRoute=2."""
-        for k, vid in enumerate(ids):
-            length = self._dims[vid][0]
-            h = float(heading[k])
-            fx = float(centre[k, 0]) + 0.5 * length * math.cos(h)
-            fy = float(centre[k, 1]) + 0.5 * length * math.sin(h)
-            libsumo.vehicle.moveToXY(vid, "", -1, fx, fy, angle=90.0 - math.degrees(h), keepRoute=2)
-            libsumo.vehicle.setPreviousSpeed(vid, float(speed[k]))
+        if len(ids) == 0:
+            return
+        heading = np.asarray(heading, float)
+        half = 0.5 * np.array([self._dims[v][0] for v in ids])
+        fx = (np.asarray(centre[:, 0], float) + half * np.cos(heading)).tolist()
+        fy = (np.asarray(centre[:, 1], float) + half * np.sin(heading)).tolist()
+        angle = (90.0 - np.degrees(heading)).tolist()
+        move, prev = libsumo.vehicle.moveToXY, libsumo.vehicle.setPreviousSpeed
+        for vid, x, y, a, v in zip(ids, fx, fy, angle, np.asarray(speed, float).tolist()):
+            move(vid, "", -1, x, y, angle=a, keepRoute=2)
+            prev(vid, v)
 
     def release(self, vid: str) -> None:
         """Take a finished ego out of the simulation."""
         if vid in self._egos:
             self._egos.discard(vid)
+            self._static_ids = None
         if vid in self._dims and vid in libsumo.vehicle.getIDList():
             libsumo.vehicle.remove(vid)
 
@@ -154,6 +168,7 @@ class SumoSim:
         for vid in arrived:
             self._dims.pop(vid, None)
             self._egos.discard(vid)
+            self._static_ids = None
         self._subscribe_new(self.departed())
         t = self.time_s
         return [SumoCollision(t, c.collider, c.victim, c.type, c.lane) for c in libsumo.simulation.getCollisions()]

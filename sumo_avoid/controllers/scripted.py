@@ -45,16 +45,18 @@ class ScriptedController:
         self._start.pop(vid, None)
 
     def act(self, obs: Observation) -> np.ndarray:
-        out = np.zeros((len(obs.ego_ids), 2))
         snap = obs.snapshot
-        for k, (vid, r) in enumerate(zip(obs.ego_ids, obs.ego_rows)):
+        for vid, r in zip(obs.ego_ids, obs.ego_rows):
             if math.isnan(self._dir[vid]):
                 self._dir[vid] = float(snap.heading[r])
-            start = self._start.setdefault(vid, snap.pos[r].copy())
+        d = np.array([self._dir[v] for v in obs.ego_ids], dtype=float)
+        out = self.p.speed_mps * np.column_stack([np.cos(d), np.sin(d)]) if len(d) else np.zeros((0, 2))
+        for k, (vid, r) in enumerate(zip(obs.ego_ids, obs.ego_rows)):
             limit = self.p.stop_after_m.get(vid)
-            if limit is not None and np.hypot(*(snap.pos[r] - start)) >= limit:
-                continue
-            out[k] = self.p.speed_mps * np.array([math.cos(self._dir[vid]), math.sin(self._dir[vid])])
+            if limit is not None:
+                start = self._start.setdefault(vid, snap.pos[r].copy())
+                if np.hypot(*(snap.pos[r] - start)) >= limit:
+                    out[k] = 0.0
         return out
 
     def stats(self) -> dict:

@@ -36,6 +36,7 @@ reflections per target, elevation. ``Detections.target`` (the true id) is for ev
 """
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 
@@ -109,13 +110,41 @@ class Detections:
 
 def _pad_candidates(mask: np.ndarray):
     """(E, N) bool -> (E, T) target indices and (E, T) validity, T = max candidates per ego."""
-    counts = mask.sum(axis=1)
-    T = int(counts.max()) if mask.size else 0
-    idx = np.zeros((mask.shape[0], T), dtype=int)
+    e, n = np.nonzero(mask)  # row-major: each ego's candidates in increasing target order
+    return _pad_pairs(e, n, mask.shape[0])
+
+
+def _pad_pairs(e: np.ndarray, n: np.ndarray, E: int):
+    """(ego, target) pairs sorted by ego -> (E, T) target indices and (E, T) validity."""
+    counts = np.bincount(e, minlength=E)
+    T = int(counts.max()) if E else 0
+    idx = np.zeros((E, T), dtype=int)
     valid = np.arange(T)[None, :] < counts[:, None]
-    e, n = np.nonzero(mask)
-    idx[valid] = n  # np.nonzero is row-major, so each ego's candidates fill its row in order
+    idx[valid] = n
     return idx, valid
+
+
+def _candidates(spos, fwd, centre, radius, rows, max_range_m: float, half_rad: float):
+    """(ego, target) pairs, sorted by ego then target, whose circumscribed disc meets the range
+    disc and the FOV wedge (|lateral| cos(half) - forward sin(half) <= radius: the disc reaches
+    the wedge's side); never the ego itself. A k-d tree over the target centres gives each ego its
+    neighbours within range (+ the largest radius); the exact tests then run on those pairs only."""
+    from scipy.spatial import cKDTree
+
+    E = len(spos)
+    if E == 0 or len(centre) == 0:
+        return np.zeros(0, int), np.zeros(0, int)
+    reach = (max_range_m + float(radius.max())) * (1 + 1e-9) + 1e-6  # a superset of the exact test
+    near = cKDTree(centre).query_ball_point(spos, reach, return_sorted=True)
+    e = np.repeat(np.arange(E), [len(x) for x in near])
+    n = np.fromiter(itertools.chain.from_iterable(near), dtype=int, count=len(e))
+    dx, dy = centre[n, 0] - spos[e, 0], centre[n, 1] - spos[e, 1]
+    fx, fy = fwd[e, 0], fwd[e, 1]
+    ahead, side = dx * fx + dy * fy, np.abs(dy * fx - dx * fy)
+    r = radius[n]
+    keep = ((dx * dx + dy * dy <= (max_range_m + r) ** 2) & (ahead >= -r)
+            & (side * math.cos(half_rad) - ahead * math.sin(half_rad) <= r) & (n != rows[e]))
+    return e[keep], n[keep]
 
 
 def ray_depth(rel: np.ndarray, angles: np.ndarray) -> np.ndarray:
@@ -218,16 +247,8 @@ class Radar:
         vel = np.concatenate([snap.vel, np.zeros((len(polys), 2))]) if polys else snap.vel
         centre = allc.mean(axis=1)
         radius = np.sqrt(((allc - centre[:, None]) ** 2).sum(-1)).max(axis=1)
-        # candidates: the target's circumscribed disc meets the range disc and the FOV wedge
-        # (|lateral| cos(half) - forward sin(half) <= radius: the disc reaches the wedge's side)
-        dx, dy = (centre[None] - spos[:, None]).transpose(2, 0, 1)  # (E, N)
-        fx, fy = fwd[:, :1], fwd[:, 1:]
-        ahead, side = dx * fx + dy * fy, np.abs(dy * fx - dx * fy)
-        half = math.radians(p.fov_deg) / 2
-        mask = ((dx * dx + dy * dy <= (p.max_range_m + radius[None]) ** 2) & (ahead >= -radius[None])
-                & (side * math.cos(half) - ahead * math.sin(half) <= radius[None]))
-        mask[np.arange(E), rows] = False  # not oneself
-        idx, valid = _pad_candidates(mask)
+        e, n = _candidates(spos, fwd, centre, radius, rows, p.max_range_m, math.radians(p.fov_deg) / 2)
+        idx, valid = _pad_pairs(e, n, E)
         T = idx.shape[1]
         empty = np.zeros(0)
         out = dict(ego=np.zeros(0, int), range_m=empty, azimuth_rad=empty, radial_speed_mps=empty, target=())
