@@ -1,25 +1,36 @@
 """Radar-equipped egos among ~1,000 SUMO vehicles: the plug-in's wall time vs plain SUMO's.
 
     python benchmarks/radar.py [--vehicles 1000] [--egos 100] [--duration 30] [--controller scripted]
-                               [--repeat 1] [--profile]
+                               [--chunk 10] [--cpu N] [--sequential [--repeat 3]] [--profile]
 
 Traffic: ``--vehicles`` cars on nets/highway.net.xml (3 lanes x 4 km), all inserted at t = 0,
-11.5 m apart in every lane, at 8 m/s; every (vehicles/egos)-th one (from 400 m before the road end back) is an ego. Same route file,
-seed and SUMO options for both runs, in this process, one after the other:
+11.5 m apart in every lane, at 8 m/s; every (vehicles/egos)-th one (from 400 m before the road end
+back) is an ego. Same route file, seed and SUMO options on both sides:
 
 * ``plain_s``: SUMO alone drives everybody (egos too): libsumo.simulationStep() only.
 * ``plugin_s``: runner.run() with ``ego.sensor = "radar"``, ``ego.safety = "danger_time"`` and the
   given controller (default ``scripted``: constant speed, so the time is the plug-in's machinery
-  (snapshot, radar, danger-time layer, actuator, moveToXY, recorder) rather than a controller's).
+  (snapshot, radar, tracker, danger-time layer, actuator, moveToXY, recorder) rather than a
+  controller's).
 
-Both exclude SUMO start-up (network and route loading). ``--repeat N`` (default 3) alternates the
-two N times and keeps each one's fastest time (the least disturbed by other load, as ``timeit``
-does). Every plug-in run is split into the time inside SUMO's ``simulationStep`` and the rest (the
-plug-in's own Python: snapshot read, radar, tracker, layer, actuator, recorder), so each line shows
-where the time went. ``--no-sumo-collisions`` runs both sides without SUMO's own collision check
-(its sublane check compares every pair of vehicles on a lane, and each lane holding a vehicle moved
-by ``moveToXY`` gets one extra check per step). ``--profile`` prints a cProfile summary of the
-plug-in run. Last line: ``plugin_s=X plain_s=Y ratio=Z``.
+Both count the simulation loop only: from SUMO loaded (``libsumo.start`` returned) to
+``libsumo.close``; network and route loading are excluded on both sides.
+
+**How the two are timed (default: taking turns).** These 2-core VMs are shared: a fixed Python loop
+on one pinned vCPU took anywhere from 0.34 s to 0.69 s within a minute, and the two vCPUs differ
+from each other by as much (measured 2026-11-23, ``docs/radar.md``). Runs timed one after the other
+(``--sequential``) therefore compare two different machines: the same plug-in run gave 64 s and
+81 s. By default the two sides run as two processes pinned to the **same** CPU that take turns every
+``--chunk`` steps (a baton of two semaphores; the waiting side sleeps); each side counts only the
+time it holds the baton. Both see the same machine, within a couple of seconds, and the per-side
+SUMO step times are comparable as well. BLAS threads are limited to one in both processes (a
+spinning BLAS thread of one side would otherwise take CPU from the other).
+
+Every line splits the plug-in's time into SUMO's ``simulationStep`` and the plug-in's own Python.
+``--no-sumo-collisions`` runs both sides without SUMO's own collision check (its sublane check
+compares every pair of vehicles on a lane; a lane holding a vehicle moved by ``moveToXY`` is
+checked once more per step). ``--profile`` prints a cProfile summary of the plug-in side. Last
+line: ``plugin_s=X plain_s=Y ratio=Z``.
 """
 from __future__ import annotations
 
@@ -27,21 +38,31 @@ import argparse
 import contextlib
 import cProfile
 import io
+import multiprocessing as mp
+import os
 import pathlib
 import pstats
+import sys
 import tempfile
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-NET = ROOT / "nets" / "highway.net.xml"
+NETS = {"single": (ROOT / "nets" / "highway.net.xml", None),  # one 4000 m edge
+        "segments": (ROOT / "nets" / "highway_segments.net.xml", 250.0)}  # 16 edges of 250 m
 
 
-def write_routes(path: pathlib.Path, n: int, n_ego: int, spacing_m: float = 11.5, speed: float = 8.0) -> list[str]:
-    every = max(n // max(n_ego, 1), 1)
+def write_routes(path: pathlib.Path, n: int, n_ego: int, spacing_m: float = 11.5, speed: float = 8.0,
+                 segment_m: float | None = None) -> list[str]:
+    """The benchmark traffic; ``segment_m``: the road is cut into edges hw0, hw1, ... of that length
+    (nets/highway_segments.net.xml), each vehicle departs on the edge it stands on."""
     lines = ['<routes>',
              '  <vType id="car" vClass="passenger" length="4.5" width="1.8" maxSpeed="12" sigma="0"/>',
-             '  <vType id="ego_car" vClass="passenger" length="4.5" width="1.8" accel="3" decel="8" maxSpeed="40" sigma="0"/>',
-             '  <route id="r" edges="hw"/>']
+             '  <vType id="ego_car" vClass="passenger" length="4.5" width="1.8" accel="3" decel="8" maxSpeed="40" sigma="0"/>']
+    n_seg = int(round(4000.0 / segment_m)) if segment_m else 1
+    if segment_m:
+        lines += [f'  <route id="r{k}" edges="{" ".join(f"hw{j}" for j in range(k, n_seg))}"/>' for k in range(n_seg)]
+    else:
+        lines.append('  <route id="r0" edges="hw"/>')
     egos, k = [], 0
     per_lane = -(-n // 3)
     every = max((n - 3 * int(400 / spacing_m)) // max(n_ego, 1), 1)
@@ -54,8 +75,10 @@ def write_routes(path: pathlib.Path, n: int, n_ego: int, spacing_m: float = 11.5
             is_ego = k % every == 0 and len(egos) < n_ego and pos < 3590.0
             vid = f"ego{len(egos)}" if is_ego else f"v{k}"
             egos += [vid] if is_ego else []
-            lines.append(f'  <vehicle id="{vid}" type="{"ego_car" if is_ego else "car"}" route="r" depart="0" '
-                         f'departLane="{lane}" departPos="{pos:.1f}" departSpeed="{speed}" insertionChecks="none"/>')
+            seg = min(int(pos // segment_m), n_seg - 1) if segment_m else 0
+            lines.append(f'  <vehicle id="{vid}" type="{"ego_car" if is_ego else "car"}" route="r{seg}" depart="0" '
+                         f'departLane="{lane}" departPos="{pos - seg * (segment_m or 0.0):.1f}" departSpeed="{speed}" '
+                         'insertionChecks="none"/>')
             k += 1
     lines.append('</routes>')
     path.write_text("\n".join(lines) + "\n")
@@ -63,11 +86,11 @@ def write_routes(path: pathlib.Path, n: int, n_ego: int, spacing_m: float = 11.5
 
 
 def write_scenario(path: pathlib.Path, routes: pathlib.Path, egos: list[str], duration: float, controller: str,
-                   sumo_collisions: bool = True) -> None:
+                   sumo_collisions: bool = True, net: pathlib.Path = NETS["single"][0]) -> None:
     ids = ", ".join(f'"{e}"' for e in egos)
     path.write_text(f"""name = "radar_bench"
 [sim]
-net = "{NET}"
+net = "{net}"
 routes = ["{routes}"]
 duration_s = {duration}
 seed = 1
@@ -85,45 +108,158 @@ plots = false
 """)
 
 
-def plain(scn, sumo_collisions: bool = True) -> float:
-    import libsumo
+class Turns:
+    """Two processes on one CPU take turns every ``chunk`` steps; ``waited`` is the time this side
+    slept waiting for its turn (excluded from its timing)."""
 
-    from sumo_avoid.sim import sumo_args
+    def __init__(self, mine, theirs, done, me: int, chunk: int, counter):
+        self.mine, self.theirs, self.done, self.me, self.chunk = mine, theirs, done, me, chunk
+        self.counter = counter
+        self.steps = 0
+        self.waited = 0.0
 
-    spec = scn.spec
-    args = sumo_args(scn.net_file, scn.route_files, scn.additional_files, spec.sim.step_s, spec.sim.seed,
-                     spec.sim.lateral_resolution_m, None, sumo_collisions=sumo_collisions)
-    libsumo.start(args)
-    try:
+    def wait_turn(self) -> None:
         t0 = time.perf_counter()
-        for _ in range(int(round(spec.sim.duration_s / spec.sim.step_s)) + 1):
-            libsumo.simulationStep()
-        return time.perf_counter() - t0
-    finally:
-        libsumo.close()
+        self.mine.acquire()
+        self.waited += time.perf_counter() - t0
+
+    def stepped(self) -> None:
+        self.steps += 1
+        self.counter.value = self.steps
+        if self.steps % self.chunk == 0 and not self.done[1 - self.me]:
+            self.theirs.release()
+            self.wait_turn()
+
+    def finish(self) -> None:
+        self.done[self.me] = 1
+        self.theirs.release()
 
 
 @contextlib.contextmanager
-def timed_sumo_steps():
-    """Accumulate the wall time spent inside libsumo.simulationStep (sim.py calls it through the
-    module attribute, so wrapping it here sees every step of the plug-in run)."""
+def instrumented(turns: Turns | None):
+    """Wrap libsumo.start / simulationStep / close (sim.py calls them through the module, so this
+    sees the plug-in's calls too): the loop's wall time from SUMO loaded to close, the time inside
+    simulationStep, and, with ``turns``, the baton between the two sides."""
     import libsumo
 
-    total = [0.0]
-    original = libsumo.simulationStep
+    t = {"sumo_step_s": 0.0, "t0": None, "t1": None}
+    orig = libsumo.start, libsumo.simulationStep, libsumo.close
 
-    def step(*args):
+    def start(*a, **k):
+        out = orig[0](*a, **k)
+        t["t0"] = time.perf_counter()  # the first wait for the baton is in turns.waited, like all others
+        if turns is not None:
+            turns.wait_turn()
+        return out
+
+    def step(*a):
         t0 = time.perf_counter()
         try:
-            return original(*args)
+            return orig[1](*a)
         finally:
-            total[0] += time.perf_counter() - t0
+            t["sumo_step_s"] += time.perf_counter() - t0
+            if turns is not None:
+                turns.stepped()
 
-    libsumo.simulationStep = step
+    def close(*a):
+        if t["t1"] is None:
+            t["t1"] = time.perf_counter()
+            if turns is not None:
+                turns.finish()
+        return orig[2](*a)
+
+    libsumo.start, libsumo.simulationStep, libsumo.close = start, step, close
     try:
-        yield total
+        yield t
     finally:
-        libsumo.simulationStep = original
+        libsumo.start, libsumo.simulationStep, libsumo.close = orig
+
+
+def side(which: str, toml: str, turns: Turns | None, profile: bool = False) -> dict:
+    """Run one side (``plain`` or ``plugin``) of the benchmark in this process; its timings."""
+    import libsumo
+
+    from sumo_avoid import evaluate, runner, scenario
+    from sumo_avoid.sim import sumo_args
+
+    scn = scenario.load(pathlib.Path(toml))
+    spec = scn.spec
+    out = {}
+    with instrumented(turns) as t:
+        if which == "plain":
+            args = sumo_args(scn.net_file, scn.route_files, scn.additional_files, spec.sim.step_s, spec.sim.seed,
+                             spec.sim.lateral_resolution_m, None, sumo_collisions=spec.sim.sumo_collisions)
+            libsumo.start(args)
+            try:
+                for _ in range(int(round(spec.sim.duration_s / spec.sim.step_s))):  # as many as runner.run
+                    libsumo.simulationStep()
+            finally:
+                libsumo.close()
+        else:
+            prof = cProfile.Profile() if profile else None
+            if prof:
+                prof.enable()
+            res = runner.run(scn)
+            if prof:
+                prof.disable()
+                s = io.StringIO()
+                pstats.Stats(prof, stream=s).sort_stats("tottime").print_stats(18)
+                out["profile"] = s.getvalue()
+            m = evaluate.compute(res)
+            out.update(steps=res.steps, collisions=m["collisions"], radar_brakes=m["radar_brakes"],
+                       radar_warnings=m["radar_warnings"])
+    busy = t["t1"] - t["t0"] - (turns.waited if turns is not None else 0.0)
+    return {**out, "busy_s": busy, "sumo_step_s": t["sumo_step_s"]}
+
+
+def _child(which, me, toml, cpu, sems, done, chunk, counter, profile, queue, run_side) -> None:
+    os.sched_setaffinity(0, {cpu})
+    turns = Turns(sems[me], sems[1 - me], done, me, chunk, counter)
+    try:
+        queue.put((which, run_side(which, toml, turns, profile)))
+    except BaseException as e:  # report, and never leave the other side waiting for the baton
+        turns.finish()
+        queue.put((which, {"error": f"{type(e).__name__}: {e}"}))
+
+
+def interleaved(toml: pathlib.Path, cpu: int, chunk: int, n_steps: int, profile: bool,
+                sides=("plain", "plugin"), run_side=side) -> dict:
+    """Run two sides (``run_side(name, toml, turns, profile)``) taking turns on ``cpu``."""
+    ctx = mp.get_context("spawn")  # fresh interpreters: the BLAS thread limit set in main() applies
+    sems = (ctx.Semaphore(0), ctx.Semaphore(0))
+    done = ctx.Array("i", 2)
+    counters = (ctx.Value("i", 0), ctx.Value("i", 0))
+    queue = ctx.Queue()
+    procs = [ctx.Process(target=_child, args=(w, k, str(toml), cpu, sems, done, chunk, counters[k],
+                                              profile and k == 1, queue, run_side))
+             for k, w in enumerate(sides)]
+    for p in procs:
+        p.start()
+    sems[1].release()  # the plug-in side has the first turn (whichever has loaded SUMO first waits)
+    results, t0 = {}, time.perf_counter()
+    while len(results) < 2:
+        with contextlib.suppress(Exception):
+            which, r = queue.get(timeout=2.0)
+            results[which] = r
+            continue
+        if not any(p.is_alive() for p in procs) and queue.empty():
+            raise RuntimeError(f"benchmark processes died: {results}")
+        print(f"\r  steps: {sides[0]} {counters[0].value}/{n_steps}  {sides[1]} {counters[1].value}/{n_steps}  "
+              f"wall {time.perf_counter() - t0:5.0f} s", end="", file=sys.stderr, flush=True)
+    print(file=sys.stderr)
+    for p in procs:
+        p.join()
+    for which, r in results.items():
+        if "error" in r:
+            raise RuntimeError(f"{which} side failed: {r['error']}")
+    return results
+
+
+def _line(plain: dict, plugin: dict) -> str:
+    own = plugin["busy_s"] - plugin["sumo_step_s"]
+    return (f"  plain {plain['busy_s']:.2f} s  plug-in {plugin['busy_s']:.2f} s = SUMO step {plugin['sumo_step_s']:.2f} s "
+            f"+ plug-in's own {own:.2f} s   (SUMO step ratio {plugin['sumo_step_s'] / plain['sumo_step_s']:.3f}, "
+            f"own / plain {own / plain['busy_s']:.3f})")
 
 
 def main(argv=None) -> None:
@@ -132,40 +268,44 @@ def main(argv=None) -> None:
     ap.add_argument("--egos", type=int, default=100)
     ap.add_argument("--duration", type=float, default=30.0)
     ap.add_argument("--controller", default="scripted")
-    ap.add_argument("--repeat", type=int, default=3, help="alternate plain/plug-in runs N times, keep each's minimum")
+    ap.add_argument("--net", choices=sorted(NETS), default="single",
+                    help="single: one 4000 m edge (the issue's benchmark); segments: the same road as 16 edges of 250 m")
+    ap.add_argument("--chunk", type=int, default=2, help="steps per turn (default 2 = 0.2 s simulated)")
+    ap.add_argument("--cpu", type=int, default=None, help="CPU both sides are pinned to (default: the last allowed)")
+    ap.add_argument("--sequential", action="store_true", help="the old way: one after the other in this process")
+    ap.add_argument("--repeat", type=int, default=3, help="--sequential: alternate N times, keep each's minimum")
     ap.add_argument("--no-sumo-collisions", action="store_true", help="SUMO's own collision check off on both sides")
     ap.add_argument("--profile", action="store_true")
     a = ap.parse_args(argv)
-    from sumo_avoid import evaluate, runner, scenario
-
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[var] = "1"
     with tempfile.TemporaryDirectory() as tmp:
         tmp = pathlib.Path(tmp)
-        egos = write_routes(tmp / "bench.rou.xml", a.vehicles, a.egos)
+        net, segment_m = NETS[a.net]
+        egos = write_routes(tmp / "bench.rou.xml", a.vehicles, a.egos, segment_m=segment_m)
         write_scenario(tmp / "bench.toml", tmp / "bench.rou.xml", egos, a.duration, a.controller,
-                       not a.no_sumo_collisions)
-        scn = scenario.load(tmp / "bench.toml")
-        plain_s = plugin_s = float("inf")
-        for _ in range(max(a.repeat, 1)):
-            this_plain = plain(scn, scn.spec.sim.sumo_collisions)
-            plain_s = min(plain_s, this_plain)
-            prof = cProfile.Profile() if a.profile else None
-            with timed_sumo_steps() as sumo_s:
-                if prof:
-                    prof.enable()
-                res = runner.run(scn)
-                if prof:
-                    prof.disable()
-            loop_s = res.timings["loop_s"]
-            plugin_s = min(plugin_s, loop_s)
-            print(f"  plain {this_plain:.2f} s  plug-in {loop_s:.2f} s = SUMO step {sumo_s[0]:.2f} s "
-                  f"+ plug-in's own {loop_s - sumo_s[0]:.2f} s", flush=True)
-        m = evaluate.compute(res)
-        print(f"vehicles {a.vehicles}  egos {len(egos)}  steps {res.steps}  controller {a.controller}  "
-              f"collisions {m['collisions']}  radar_brakes {m['radar_brakes']}  radar_warnings {m['radar_warnings']}")
-        if prof:
-            s = io.StringIO()
-            pstats.Stats(prof, stream=s).sort_stats("tottime").print_stats(18)
-            print(s.getvalue())
+                       not a.no_sumo_collisions, net)
+        n_steps = int(round(a.duration / 0.1))
+        if a.sequential:
+            plain_s = plugin_s = float("inf")
+            for _ in range(max(a.repeat, 1)):
+                pl = side("plain", str(tmp / "bench.toml"), None)
+                pg = side("plugin", str(tmp / "bench.toml"), None, a.profile)
+                plain_s, plugin_s = min(plain_s, pl["busy_s"]), min(plugin_s, pg["busy_s"])
+                print(_line(pl, pg), flush=True)
+            how = f"sequential, best of {max(a.repeat, 1)}"
+        else:
+            cpu = a.cpu if a.cpu is not None else max(os.sched_getaffinity(0))
+            r = interleaved(tmp / "bench.toml", cpu, a.chunk, n_steps, a.profile)
+            pl, pg = r["plain"], r["plugin"]
+            plain_s, plugin_s = pl["busy_s"], pg["busy_s"]
+            print(_line(pl, pg), flush=True)
+            how = f"taking turns every {a.chunk} steps on cpu {cpu}"
+        print(f"vehicles {a.vehicles}  egos {len(egos)}  steps {pg['steps']}  controller {a.controller}  "
+              f"collisions {pg['collisions']}  radar_brakes {pg['radar_brakes']}  radar_warnings {pg['radar_warnings']}"
+              f"  net {a.net}  ({how})")
+        if "profile" in pg:
+            print(pg["profile"])
     print(f"plugin_s={plugin_s:.2f} plain_s={plain_s:.2f} ratio={plugin_s / plain_s:.2f}")
 
 
