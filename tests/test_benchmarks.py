@@ -1,0 +1,60 @@
+"""The radar benchmark's machinery on a tiny traffic (its timings are not asserted: speed is
+measured by running the benchmark, not in tests). Real libsumo, real nets."""
+import re
+import subprocess
+import sys
+
+import pytest
+
+from conftest import ROOT
+
+LAST = re.compile(r"^plugin_s=(\d+\.\d\d) plain_s=(\d+\.\d\d) ratio=(\d+\.\d\d)$")
+
+
+@pytest.mark.parametrize("net", ["single", "segments"])
+def test_radar_benchmark_takes_turns_and_prints_its_last_line(net):
+    out = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "radar.py"), "--vehicles", "150", "--egos", "5",
+                          "--duration", "1", "--chunk", "3", "--net", net],
+                         capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.strip().splitlines()
+    m = LAST.match(lines[-1])
+    assert m, lines[-1]
+    plugin_s, plain_s, ratio = map(float, m.groups())
+    assert plugin_s > 0 and plain_s > 0
+    # the ratio is of the unrounded times: consistent with the printed ones within their rounding
+    assert (plugin_s - 0.005) / (plain_s + 0.005) - 0.005 <= ratio <= (plugin_s + 0.005) / (plain_s - 0.005) + 0.005
+    # both sides ran all 10 steps and the plug-in drove its 5 egos with the radar in the loop
+    assert "egos 5  steps 10" in out.stdout and f"net {net}" in out.stdout
+    assert "steps: plain 10/10  plugin 10/10" in out.stderr
+
+
+def test_benchmark_turns_alternate_between_two_processes():
+    """The baton: with chunk 2, the sides' step counters interleave (neither runs ahead by more
+    than one chunk while the other still has steps to do)."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    import multiprocessing as mp
+
+    import radar as bench
+
+    ctx = mp.get_context("fork")
+    sems = (ctx.Semaphore(0), ctx.Semaphore(0))
+    done = ctx.Array("i", 2)
+    log, k = ctx.Array("i", 10), ctx.Value("i", 0)  # written only by the side holding the baton
+
+    def side(me, n):
+        t = bench.Turns(sems[me], sems[1 - me], done, me, 2, ctx.Value("i", 0))
+        t.wait_turn()
+        for _ in range(n):
+            log[k.value] = me
+            k.value += 1
+            t.stepped()
+        t.finish()
+
+    procs = [ctx.Process(target=side, args=(k, n)) for k, n in ((0, 6), (1, 4))]
+    for p in procs:
+        p.start()
+    sems[0].release()
+    for p in procs:
+        p.join(timeout=30)
+    assert list(log) == [0, 0, 1, 1, 0, 0, 1, 1, 0, 0]
