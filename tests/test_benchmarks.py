@@ -58,3 +58,13 @@ def test_benchmark_turns_alternate_between_two_processes():
     for p in procs:
         p.join(timeout=30)
     assert list(log) == [0, 0, 1, 1, 0, 0, 1, 1, 0, 0]
+
+
+def test_sumo_step_benchmark_compares_two_ways_of_driving_the_egos():
+    out = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "sumo_step.py"), "setspeed", "move",
+                          "--steps", "6"], capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    m = re.match(r"^setspeed_s=(\d+\.\d\d) move_s=(\d+\.\d\d) ratio=(\d+\.\d\d\d)$", out.stdout.strip().splitlines()[-1])
+    assert m, out.stdout
+    assert float(m.group(1)) > 0 and float(m.group(2)) > 0
+    assert "steps: setspeed 6/6  move 6/6" in out.stderr
