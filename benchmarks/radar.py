@@ -250,8 +250,11 @@ def interleaved(toml: pathlib.Path, cpu: int, chunk: int, n_steps: int, profile:
             which, r = queue.get(timeout=2.0)
             results[which] = r
             continue
-        if not any(p.is_alive() for p in procs) and queue.empty():
-            raise RuntimeError(f"benchmark processes died: {results}")
+        dead = [w for w, p in zip(sides, procs) if p.exitcode not in (None, 0)]
+        if dead or (not any(p.is_alive() for p in procs) and queue.empty()):
+            for p in procs:  # the other side may be waiting for a baton that never comes
+                p.terminate()
+            raise RuntimeError(f"benchmark process(es) {dead} died (exit codes {[p.exitcode for p in procs]})")
         progress()
     progress("\n")
     for p in procs:
