@@ -1,9 +1,11 @@
 """Radar-equipped egos among ~1,000 SUMO vehicles: the plug-in's wall time vs plain SUMO's.
 
     python benchmarks/radar.py [--vehicles 1000] [--egos 100] [--duration 30] [--controller scripted]
-                               [--chunk 10] [--cpu N] [--sequential [--repeat 3]] [--profile]
+                               [--net single|segments] [--chunk 2] [--cpu N] [--sequential [--repeat 3]]
+                               [--no-sumo-collisions] [--profile]
 
-Traffic: ``--vehicles`` cars on nets/highway.net.xml (3 lanes x 4 km), all inserted at t = 0,
+Traffic: ``--vehicles`` cars on nets/highway.net.xml (3 lanes x 4 km, one edge; ``--net segments``:
+the same road as 16 edges of 250 m, nets/highway_segments.net.xml), all inserted at t = 0,
 11.5 m apart in every lane, at 8 m/s; every (vehicles/egos)-th one (from 400 m before the road end
 back) is an ego. Same route file, seed and SUMO options on both sides:
 
@@ -22,8 +24,8 @@ from each other by as much (measured 2026-11-23, ``docs/radar.md``). Runs timed 
 (``--sequential``) therefore compare two different machines: the same plug-in run gave 64 s and
 81 s. By default the two sides run as two processes pinned to the **same** CPU that take turns every
 ``--chunk`` steps (a baton of two semaphores; the waiting side sleeps); each side counts only the
-time it holds the baton. Both see the same machine, within a couple of seconds, and the per-side
-SUMO step times are comparable as well. BLAS threads are limited to one in both processes (a
+time it holds the baton (the hand-over counts as waiting). Both see the same machine within a
+fraction of a second (2 steps), and the per-side SUMO step times are comparable as well. BLAS threads are limited to one in both processes (a
 spinning BLAS thread of one side would otherwise take CPU from the other).
 
 Every line splits the plug-in's time into SUMO's ``simulationStep`` and the plug-in's own Python.
