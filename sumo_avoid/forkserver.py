@@ -22,6 +22,9 @@ from .worker import _exit_now, child
 def _preload(plots: bool) -> None:
     """What every run imports (so the children get it for free), and the plotting stack on demand."""
     from . import arena, evaluate, order, runner, scenario  # noqa: F401
+    from .sensors import occlusion
+
+    occlusion.warm()  # the radar's compiled kernel (numba; from its on-disk cache after the first time)
     if plots:
         import matplotlib.backends.backend_agg  # noqa: F401
         import matplotlib.figure  # noqa: F401
