@@ -158,8 +158,10 @@ def run(scn: Scenario, *, log_file=None, progress: bool = False) -> RunResult:
                 active.pop(vid)
                 controller.remove_ego(vid)
                 finished.add(vid)
-            done = [v for v in present if uses_goals
-                    and np.hypot(*(snap.pos[snap.index[v]] - goals[v])) <= spec.ego.goal_tolerance_m]
+            done = []
+            if uses_goals and present:  # centre within the goal tolerance: one array operation for all egos
+                gap = snap.pos[[snap.index[v] for v in present]] - np.array([goals[v] for v in present])
+                done = [v for v, d in zip(present, np.hypot(gap[:, 0], gap[:, 1])) if d <= spec.ego.goal_tolerance_m]
             for vid in done:
                 sim.release(vid)
                 controller.remove_ego(vid)

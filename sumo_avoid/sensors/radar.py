@@ -170,8 +170,11 @@ class Radar:
         self.rng = rng
         self._last: Detections | None = None
         self.log: list[Detections] = []
+        from . import occlusion  # numba: imported here, not with this module (runs without radar skip it)
         from .tracker import Tracker  # late: tracker imports Detections from here
 
+        occlusion.warm()  # load the compiled kernel now, with the set-up, not inside the first step
+        self._scan = occlusion.scan
         self.tracker = Tracker(params.memory_s, params.fov_deg, params.max_range_m) if params.memory_s > 0 else None
 
     def objects(self, det, along=None):
@@ -201,8 +204,6 @@ class Radar:
         return snap.pos[rows] + 0.5 * snap.length[rows][:, None] * fwd, hd, fwd
 
     def measure(self, snap, ego_ids, obstacles=()) -> Detections:
-        from .occlusion import scan  # numba: imported (and the kernel loaded) on the first scan only
-
         p = self.p
         rows = np.array([snap.index[v] for v in ego_ids], dtype=int)
         spos, hd, fwd = self.pose(snap, rows)
@@ -211,7 +212,7 @@ class Radar:
         half = math.radians(p.fov_deg) / 2
         e, n = _candidates(spos, fwd, centre, radius, rows, p.max_range_m, half)
         ptr = np.concatenate([[0], np.cumsum(np.bincount(e, minlength=len(rows)))]).astype(np.int64)
-        ego, tgt, rng, az, vr = scan(spos, hd, svel, polys, vel, ptr, n.astype(np.int64), half, p.max_range_m)
+        ego, tgt, rng, az, vr = self._scan(spos, hd, svel, polys, vel, ptr, n.astype(np.int64), half, p.max_range_m)
         det = Detections(snap.time_s, tuple(ego_ids), spos, hd, svel, ego, rng, az, vr,
                          tuple(ids[i] for i in tgt), mount=self.mount)
         return self._imperfect(det)
