@@ -189,6 +189,8 @@ def scan(spos, hd, svel, polys, tvel, ptr, cand, half, max_range):
 def warm() -> None:
     """Load (or, the first time on a machine, compile) the kernel now: the batch fork server calls
     this once so that its forked runs do not each pay for it."""
-    z2 = np.zeros((0, 2))
-    scan(np.zeros((1, 2)), np.zeros(1), np.zeros((1, 2)), np.zeros((0, 4, 2)), z2, np.zeros(2, np.int64),
-         np.zeros(0, np.int64), 0.5, 100.0)
+    frozen = np.zeros((0, 2))
+    frozen.flags.writeable = False  # target velocities straight from a Snapshot are read-only
+    for tvel in (np.zeros((0, 2)), frozen):  # numba compiles one version for each
+        scan(np.zeros((1, 2)), np.zeros(1), np.zeros((1, 2)), np.zeros((0, 4, 2)), tvel, np.zeros(2, np.int64),
+             np.zeros(0, np.int64), 0.5, 100.0)
