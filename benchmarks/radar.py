@@ -181,21 +181,34 @@ def instrumented(turns: Turns | None):
         libsumo.start, libsumo.simulationStep, libsumo.close = orig
 
 
+def start_sumo(scn) -> None:
+    """Start plain SUMO with the scenario's options, exactly as runner.run does (sim.sumo_args)."""
+    import libsumo
+
+    from sumo_avoid.sim import sumo_args
+
+    spec = scn.spec
+    libsumo.start(sumo_args(scn.net_file, scn.route_files, scn.additional_files, spec.sim.step_s, spec.sim.seed,
+                            spec.sim.lateral_resolution_m, None, sumo_collisions=spec.sim.sumo_collisions))
+
+
+def busy_s(t: dict, turns: Turns | None) -> float:
+    """The loop's wall time without the waits for the baton."""
+    return t["t1"] - t["t0"] - (turns.waited if turns is not None else 0.0)
+
+
 def side(which: str, toml: str, turns: Turns | None, profile: bool = False) -> dict:
     """Run one side (``plain`` or ``plugin``) of the benchmark in this process; its timings."""
     import libsumo
 
     from sumo_avoid import evaluate, runner, scenario
-    from sumo_avoid.sim import sumo_args
 
     scn = scenario.load(pathlib.Path(toml))
     spec = scn.spec
     out = {}
     with instrumented(turns) as t:
         if which == "plain":
-            args = sumo_args(scn.net_file, scn.route_files, scn.additional_files, spec.sim.step_s, spec.sim.seed,
-                             spec.sim.lateral_resolution_m, None, sumo_collisions=spec.sim.sumo_collisions)
-            libsumo.start(args)
+            start_sumo(scn)
             try:
                 for _ in range(int(round(spec.sim.duration_s / spec.sim.step_s))):  # as many as runner.run
                     libsumo.simulationStep()
@@ -214,8 +227,7 @@ def side(which: str, toml: str, turns: Turns | None, profile: bool = False) -> d
             m = evaluate.compute(res)
             out.update(steps=res.steps, collisions=m["collisions"], radar_brakes=m["radar_brakes"],
                        radar_warnings=m["radar_warnings"])
-    busy = t["t1"] - t["t0"] - (turns.waited if turns is not None else 0.0)
-    return {**out, "busy_s": busy, "sumo_step_s": t["sumo_step_s"]}
+    return {**out, "busy_s": busy_s(t, turns), "sumo_step_s": t["sumo_step_s"]}
 
 
 def _child(which, me, toml, cpu, sems, done, chunk, counter, profile, queue, run_side) -> None:
