@@ -11,6 +11,7 @@ lane-change mode 0), so a controller's mistakes are not hidden; other vehicles k
 """
 from __future__ import annotations
 
+import itertools
 import math
 import pathlib
 from dataclasses import dataclass
@@ -85,8 +86,8 @@ class SumoSim:
         libsumo.simulation.subscribe(list(_SIM_VARS))
         self._dims: dict[str, tuple[float, float]] = {}  # id -> (length, width), static
         self._egos: set[str] = set()
-        self._static_ids: tuple[str, ...] | None = None  # read(): the ids the cached static arrays belong to
-        self._static = (np.zeros((0, 2)), np.zeros(0, bool))
+        self._static_key: tuple[str, ...] | None = None  # read(): libsumo's ids the cached static part is for
+        self._static: tuple = ()
         self._subscribe_new(libsumo.vehicle.getIDList())
 
     # --- reading ---------------------------------------------------------------------------
@@ -99,25 +100,26 @@ class SumoSim:
     def read(self) -> Snapshot:
         """The world now, as an immutable snapshot (centres, math headings)."""
         res = libsumo.vehicle.getAllSubscriptionResults()
-        dims_of = self._dims
-        ids = tuple(v for v in res if v in dims_of)  # libsumo keeps a previous run's results until a step
+        key = tuple(res)
+        if key != self._static_key:  # ids, lengths, widths, ego flags, rows only change with the vehicle set
+            dims_of = self._dims
+            ids = tuple(v for v in key if v in dims_of)  # libsumo keeps a previous run's results until a step
+            self._static_key = key
+            self._static = (ids, np.array([dims_of[v] for v in ids], dtype=float).reshape(-1, 2),
+                            np.array([v in self._egos for v in ids], dtype=bool))
+        ids, dims, is_ego = self._static
         n = len(ids)
         if n == 0:
             return Snapshot.empty(self.time_s)
-        if ids != self._static_ids:  # lengths, widths and ego flags only change with the vehicle set
-            self._static_ids = ids
-            self._static = (np.array([dims_of[v] for v in ids], dtype=float),
-                            np.array([v in self._egos for v in ids], dtype=bool))
-        dims, is_ego = self._static
+        rows = res.values() if n == len(key) else [res[v] for v in ids]
         c = libsumo.constants
         P, A, S = c.VAR_POSITION, c.VAR_ANGLE, c.VAR_SPEED
-        rows = [res[v] for v in ids]
-        front = np.array([r[P] for r in rows], dtype=float)
-        heading = np.radians(90.0 - np.fromiter((r[A] for r in rows), float, n))
-        speed = np.fromiter((r[S] for r in rows), float, n)
+        flat = np.fromiter(itertools.chain.from_iterable((*r[P], r[A], r[S]) for r in rows), float, 4 * n)
+        flat = flat.reshape(n, 4)  # front bumper x, y, compass angle (deg), speed
+        heading = np.radians(90.0 - flat[:, 2])
         direction = np.column_stack([np.cos(heading), np.sin(heading)])
-        centre = front - direction * (dims[:, :1] / 2.0)
-        return Snapshot(self.time_s, ids, centre, direction * speed[:, None], heading,
+        centre = flat[:, :2] - direction * (dims[:, :1] / 2.0)
+        return Snapshot(self.time_s, ids, centre, direction * flat[:, 3:4], heading,
                         dims[:, 0], dims[:, 1], is_ego)
 
     @property
@@ -136,7 +138,7 @@ class SumoSim:
         libsumo.vehicle.setSpeedMode(vid, EGO_SPEED_MODE)
         libsumo.vehicle.setLaneChangeMode(vid, EGO_LANE_CHANGE_MODE)
         self._egos.add(vid)
-        self._static_ids = None
+        self._static_key = None
         return EgoInfo(vid, tuple(libsumo.vehicle.getRoute(vid)), libsumo.vehicle.getLaneIndex(vid))
 
     def apply(self, ids, centre: np.ndarray, heading: np.ndarray, speed: np.ndarray) -> None:
@@ -157,7 +159,7 @@ class SumoSim:
         """Take a finished ego out of the simulation."""
         if vid in self._egos:
             self._egos.discard(vid)
-            self._static_ids = None
+            self._static_key = None
         if vid in self._dims and vid in libsumo.vehicle.getIDList():
             libsumo.vehicle.remove(vid)
 
@@ -168,7 +170,7 @@ class SumoSim:
         for vid in arrived:
             self._dims.pop(vid, None)
             self._egos.discard(vid)
-            self._static_ids = None
+            self._static_key = None
         self._subscribe_new(self.departed())
         t = self.time_s
         return [SumoCollision(t, c.collider, c.victim, c.type, c.lane) for c in libsumo.simulation.getCollisions()]

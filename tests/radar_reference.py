@@ -3,12 +3,57 @@ replaced, kept as an independent reference: tests/test_radar.py checks that the 
 are bit-identical to this one on random scenes and on a dense-traffic scene. Vectorised over all
 egos and targets: candidates padded into (E, T) blocks, angular intervals, sectors owned by the
 target their middle ray hits first, nearest visible point at owned sector ends or special angles.
+Also kept: the numpy footprints (``targets_reference``) and the k-d tree candidate stage
+(``_candidates``) that the compiled ``occlusion.boxes`` and ``occlusion.candidates`` replaced.
 """
+import itertools
 import math
 
 import numpy as np
 
-from sumo_avoid.sensors.radar import _candidates, _wrap, targets
+from sumo_avoid.geometry import footprint_corners
+from sumo_avoid.sensors.radar import _wrap
+
+
+def _candidates(spos, fwd, centre, radius, rows, max_range_m: float, half_rad: float):
+    """(ego, target) pairs, sorted by ego then target, whose circumscribed disc meets the range
+    disc and the FOV wedge (|lateral| cos(half) - forward sin(half) <= radius: the disc reaches
+    the wedge's side); never the ego itself. A k-d tree over the target centres gives each ego its
+    neighbours within range (+ the largest radius); the exact tests then run on those pairs only."""
+    from scipy.spatial import cKDTree
+
+    E = len(spos)
+    if E == 0 or len(centre) == 0:
+        return np.zeros(0, int), np.zeros(0, int)
+    reach = (max_range_m + float(radius.max())) * (1 + 1e-9) + 1e-6  # a superset of the exact test
+    near = cKDTree(centre).query_ball_point(spos, reach, return_sorted=True)
+    e = np.repeat(np.arange(E), [len(x) for x in near])
+    n = np.fromiter(itertools.chain.from_iterable(near), dtype=int, count=len(e))
+    dx, dy = centre[n, 0] - spos[e, 0], centre[n, 1] - spos[e, 1]
+    fx, fy = fwd[e, 0], fwd[e, 1]
+    ahead, side = dx * fx + dy * fy, np.abs(dy * fx - dx * fy)
+    r = radius[n]
+    keep = ((dx * dx + dy * dy <= (max_range_m + r) ** 2) & (ahead >= -r)
+            & (side * math.cos(half_rad) - ahead * math.sin(half_rad) <= r) & (n != rows[e]))
+    return e[keep], n[keep]
+
+
+def targets_reference(snap, obstacles=()):
+    """Everything a radar can see: vehicles' footprints (4 corners) and static polygons, padded to
+    K vertices by repeating the last one. Returns polys (N, K, 2), velocities (N, 2), ids (N,),
+    centres (N, 2) and circumscribed radii (N,)."""
+    corners = footprint_corners(snap.pos, snap.heading, snap.length, snap.width)
+    polys = [np.asarray(o, float).reshape(-1, 2) for o in obstacles]
+    K = max([4] + [len(o) for o in polys])
+    allc = [np.concatenate([corners, np.repeat(corners[:, -1:], K - 4, axis=1)], axis=1)]
+    allc += [np.concatenate([o, np.repeat(o[-1:], K - len(o), axis=0)])[None] for o in polys]
+    allc = np.concatenate(allc) if polys else allc[0]
+    ids = tuple(snap.ids) + tuple(f"obstacle{i}" for i in range(len(polys)))
+    vel = np.concatenate([snap.vel, np.zeros((len(polys), 2))]) if polys else snap.vel
+    centre = allc.mean(axis=1)
+    radius = np.sqrt(((allc - centre[:, None]) ** 2).sum(-1)).max(axis=1)
+    return allc, vel, ids, centre, radius
+
 
 
 def _pad_candidates(mask: np.ndarray):
@@ -131,7 +176,7 @@ def visible_reference(radar, snap, ego_ids, obstacles=()) -> dict:
     """What the numpy formulation detects (before imperfections) for ``radar``'s mount."""
     rows = np.array([snap.index[v] for v in ego_ids], dtype=int)
     spos, hd, fwd = radar.pose(snap, rows)
-    polys, vel, ids, centre, radius = targets(snap, obstacles)
+    polys, vel, ids, centre, radius = targets_reference(snap, obstacles)
     e, n = _candidates(spos, fwd, centre, radius, rows, radar.p.max_range_m, math.radians(radar.p.fov_deg) / 2)
     idx, valid = _pad_pairs(e, n, len(rows))
     if not idx.shape[1]:

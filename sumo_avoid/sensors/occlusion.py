@@ -186,6 +186,87 @@ def scan(spos, hd, svel, polys, tvel, ptr, cand, half, max_range):
     return out_e[:m], out_n[:m], out_r[:m], out_a[:m], out_v[:m]
 
 
+@njit(cache=True, error_model="numpy")
+def boxes(pos, cos_h, sin_h, length, width):
+    """Vehicles' footprints as :func:`sumo_avoid.geometry.footprint_corners` computes them (same
+    operations, same order: bit-identical; the cosines and sines come from numpy), plus each one's
+    centre (mean of its corners) and circumscribed radius. Returns corners (N, 4, 2), centres
+    (N, 2), radii (N,)."""
+    N = pos.shape[0]
+    corners = np.empty((N, 4, 2))
+    centre = np.empty((N, 2))
+    radius = np.empty(N)
+    for i in range(N):
+        hl, hw = 0.5 * length[i], 0.5 * width[i]
+        fx, fy = cos_h[i], sin_h[i]
+        lx, ly = -fy, fx  # 90 degrees CCW of the heading
+        for k in range(4):
+            a = hl if k < 2 else -hl  # front, front, rear, rear
+            b = -hw if k == 0 or k == 3 else hw  # right, left, left, right
+            corners[i, k, 0] = (pos[i, 0] + a * fx) + b * lx
+            corners[i, k, 1] = (pos[i, 1] + a * fy) + b * ly
+        for d in range(2):
+            centre[i, d] = (((corners[i, 0, d] + corners[i, 1, d]) + corners[i, 2, d]) + corners[i, 3, d]) / 4.0
+        r2 = 0.0
+        for k in range(4):
+            dx, dy = corners[i, k, 0] - centre[i, 0], corners[i, k, 1] - centre[i, 1]
+            r2 = max(r2, math.sqrt(dx * dx + dy * dy))
+        radius[i] = r2
+    return corners, centre, radius
+
+
+@njit(cache=True, error_model="numpy")
+def candidates(spos, fwd, centre, radius, rows, max_range, cos_half, sin_half):
+    """(ego, target) pairs, sorted by ego then target, whose circumscribed disc meets the range
+    disc and the field-of-view wedge (|lateral| cos(half) - forward sin(half) <= radius: the disc
+    reaches the wedge's side); never the ego itself (``rows[e]`` is ego e's own target index).
+
+    A sweep along the axis the targets spread most on: targets sorted by that coordinate, each ego
+    tests only those within ``max_range`` + the largest radius of it (a superset of the exact test,
+    which then runs as written in tests/radar_reference.py's k-d tree version)."""
+    E, N = spos.shape[0], centre.shape[0]
+    if E == 0 or N == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    reach = (max_range + radius.max()) * (1 + 1e-9) + 1e-6
+    ax = 0 if centre[:, 0].max() - centre[:, 0].min() >= centre[:, 1].max() - centre[:, 1].min() else 1
+    key_all = centre[:, ax].copy()
+    order = np.argsort(key_all, kind="mergesort")
+    key = key_all[order]
+    cap = max(64, 8 * E)
+    out_e = np.empty(cap, np.int64)
+    out_n = np.empty(cap, np.int64)
+    buf = np.empty(N, np.int64)
+    m = 0
+    for e in range(E):
+        lo = np.searchsorted(key, spos[e, ax] - reach)
+        hi = np.searchsorted(key, spos[e, ax] + reach, side="right")
+        k = 0
+        fx, fy = fwd[e, 0], fwd[e, 1]
+        for q in range(lo, hi):
+            n = order[q]
+            dx, dy = centre[n, 0] - spos[e, 0], centre[n, 1] - spos[e, 1]
+            ahead, side = dx * fx + dy * fy, abs(dy * fx - dx * fy)
+            r = radius[n]
+            if ((dx * dx + dy * dy <= (max_range + r) * (max_range + r)) and ahead >= -r
+                    and side * cos_half - ahead * sin_half <= r and n != rows[e]):
+                buf[k] = n
+                k += 1
+        if m + k > cap:
+            cap = 2 * (m + k)
+            out_e, out_n = _grow(out_e, cap), _grow(out_n, cap)
+        out_n[m:m + k] = np.sort(buf[:k])
+        out_e[m:m + k] = e
+        m += k
+    return out_e[:m], out_n[:m]
+
+
+@njit(cache=True)
+def _grow(a, cap):
+    b = np.empty(cap, a.dtype)
+    b[:a.shape[0]] = a
+    return b
+
+
 def warm() -> None:
     """Load (or, the first time on a machine, compile) the kernel now: the batch fork server calls
     this once so that its forked runs do not each pay for it."""
@@ -194,3 +275,7 @@ def warm() -> None:
     for tvel in (np.zeros((0, 2)), frozen):  # numba compiles one version for each
         scan(np.zeros((1, 2)), np.zeros(1), np.zeros((1, 2)), np.zeros((0, 4, 2)), tvel, np.zeros(2, np.int64),
              np.zeros(0, np.int64), 0.5, 100.0)
+    one, ro, ro2 = np.zeros((1, 2)), np.zeros((1, 2)), np.ones(1)
+    ro.flags.writeable = ro2.flags.writeable = False  # a Snapshot's arrays are read-only
+    corners, centre, radius = boxes(ro, np.ones(1), np.zeros(1), ro2, ro2)
+    candidates(one, one, centre, radius, np.zeros(1, np.int64), 100.0, 0.5, 0.5)

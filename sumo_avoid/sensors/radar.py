@@ -40,7 +40,6 @@ numpy formulation it replaced (kept as the reference in tests/radar_reference.py
 """
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass, field
 
@@ -112,29 +111,6 @@ class Detections:
         return np.flatnonzero(self.ego == self.ego_ids.index(vid)) if vid in self.ego_ids else np.zeros(0, int)
 
 
-def _candidates(spos, fwd, centre, radius, rows, max_range_m: float, half_rad: float):
-    """(ego, target) pairs, sorted by ego then target, whose circumscribed disc meets the range
-    disc and the FOV wedge (|lateral| cos(half) - forward sin(half) <= radius: the disc reaches
-    the wedge's side); never the ego itself. A k-d tree over the target centres gives each ego its
-    neighbours within range (+ the largest radius); the exact tests then run on those pairs only."""
-    from scipy.spatial import cKDTree
-
-    E = len(spos)
-    if E == 0 or len(centre) == 0:
-        return np.zeros(0, int), np.zeros(0, int)
-    reach = (max_range_m + float(radius.max())) * (1 + 1e-9) + 1e-6  # a superset of the exact test
-    near = cKDTree(centre).query_ball_point(spos, reach, return_sorted=True)
-    e = np.repeat(np.arange(E), [len(x) for x in near])
-    n = np.fromiter(itertools.chain.from_iterable(near), dtype=int, count=len(e))
-    dx, dy = centre[n, 0] - spos[e, 0], centre[n, 1] - spos[e, 1]
-    fx, fy = fwd[e, 0], fwd[e, 1]
-    ahead, side = dx * fx + dy * fy, np.abs(dy * fx - dx * fy)
-    r = radius[n]
-    keep = ((dx * dx + dy * dy <= (max_range_m + r) ** 2) & (ahead >= -r)
-            & (side * math.cos(half_rad) - ahead * math.sin(half_rad) <= r) & (n != rows[e]))
-    return e[keep], n[keep]
-
-
 def _wrap(a):
     return (a + np.pi) % (2 * np.pi) - np.pi
 
@@ -142,18 +118,22 @@ def _wrap(a):
 def targets(snap, obstacles=()):
     """Everything a radar can see: vehicles' footprints (4 corners) and static polygons, padded to
     K vertices by repeating the last one. Returns polys (N, K, 2), velocities (N, 2), ids (N,),
-    centres (N, 2) and circumscribed radii (N,)."""
-    corners = footprint_corners(snap.pos, snap.heading, snap.length, snap.width)
+    centres (N, 2) (vertex means) and circumscribed radii (N,)."""
+    from .occlusion import boxes
+
+    corners, centre, radius = boxes(snap.pos, np.cos(snap.heading), np.sin(snap.heading), snap.length, snap.width)
+    ids = tuple(snap.ids)
+    if not len(obstacles):
+        return corners, snap.vel, ids, centre, radius
     polys = [np.asarray(o, float).reshape(-1, 2) for o in obstacles]
     K = max([4] + [len(o) for o in polys])
-    allc = [np.concatenate([corners, np.repeat(corners[:, -1:], K - 4, axis=1)], axis=1)]
-    allc += [np.concatenate([o, np.repeat(o[-1:], K - len(o), axis=0)])[None] for o in polys]
-    allc = np.concatenate(allc) if polys else allc[0]
-    ids = tuple(snap.ids) + tuple(f"obstacle{i}" for i in range(len(polys)))
-    vel = np.concatenate([snap.vel, np.zeros((len(polys), 2))]) if polys else snap.vel
-    centre = allc.mean(axis=1)
-    radius = np.sqrt(((allc - centre[:, None]) ** 2).sum(-1)).max(axis=1)
-    return allc, vel, ids, centre, radius
+    pad = [np.concatenate([o, np.repeat(o[-1:], K - len(o), axis=0)])[None] for o in polys]
+    allo = np.concatenate(pad)
+    oc = allo.mean(axis=1)
+    orad = np.sqrt(((allo - oc[:, None]) ** 2).sum(-1)).max(axis=1)
+    allc = np.concatenate([np.concatenate([corners, np.repeat(corners[:, -1:], K - 4, axis=1)], axis=1), allo])
+    return (allc, np.concatenate([snap.vel, np.zeros((len(polys), 2))]), ids + tuple(f"obstacle{i}" for i in range(len(polys))),
+            np.concatenate([centre, oc]), np.concatenate([radius, orad]))
 
 
 MOUNTS = ("front", "rear")
@@ -174,7 +154,7 @@ class Radar:
         from .tracker import Tracker  # late: tracker imports Detections from here
 
         occlusion.warm()  # load the compiled kernel now, with the set-up, not inside the first step
-        self._scan = occlusion.scan
+        self._scan, self._candidates = occlusion.scan, occlusion.candidates
         self.tracker = Tracker(params.memory_s, params.fov_deg, params.max_range_m) if params.memory_s > 0 else None
 
     def objects(self, det, along=None):
@@ -210,9 +190,9 @@ class Radar:
         svel = snap.vel[rows]
         polys, vel, ids, centre, radius = targets(snap, obstacles)
         half = math.radians(p.fov_deg) / 2
-        e, n = _candidates(spos, fwd, centre, radius, rows, p.max_range_m, half)
+        e, n = self._candidates(spos, fwd, centre, radius, rows, p.max_range_m, math.cos(half), math.sin(half))
         ptr = np.concatenate([[0], np.cumsum(np.bincount(e, minlength=len(rows)))]).astype(np.int64)
-        ego, tgt, rng, az, vr = self._scan(spos, hd, svel, polys, vel, ptr, n.astype(np.int64), half, p.max_range_m)
+        ego, tgt, rng, az, vr = self._scan(spos, hd, svel, polys, vel, ptr, n, half, p.max_range_m)
         det = Detections(snap.time_s, tuple(ego_ids), spos, hd, svel, ego, rng, az, vr,
                          tuple(ids[i] for i in tgt), mount=self.mount)
         return self._imperfect(det)
