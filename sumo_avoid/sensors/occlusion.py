@@ -138,12 +138,19 @@ def scan(spos, hd, svel, polys, tvel, ptr, cand, half, max_range):
         S = 2 * R
         owner = np.zeros(S, np.int64)
         has = np.zeros(S, np.bool_)
+        nearest = np.empty(R)
+        for r in range(R):
+            nearest[r] = near[ridx[r]]
+        by_near = np.argsort(nearest, kind="mergesort")
         for s in range(S):
             ang = 0.5 * (cuts[s] + cuts[s + 1]) + h
             best, bi = np.inf, 0
-            for r in range(R):
+            for q in range(R):  # nearest first; a ray's depth to a target is >= the target's distance
+                r = by_near[q]
+                if nearest[r] > best * (1 + 1e-9) + 1e-9:  # (margin: rounding) no farther one can be hit first
+                    break
                 d = depth(rel[ridx[r]], K, ang)
-                if d < best:
+                if d < best or (d == best and r < bi):  # ties: the first in candidate order, as before
                     best, bi = d, r
             owner[s] = bi
             has[s] = best < np.inf and cuts[s + 1] - cuts[s] > 1e-9
