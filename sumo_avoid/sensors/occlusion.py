@@ -1,7 +1,9 @@
-"""The radar's occlusion and nearest-visible-point computation, compiled with numba.
+"""The radar's compiled parts (numba): footprints (:func:`boxes`), candidate pairs
+(:func:`candidates`, step 1 of :mod:`.radar`) and the occlusion and nearest-visible-point
+computation (:func:`scan`).
 
-Same model as described in :mod:`.radar` (steps 2-4), one ego at a time, for the candidate targets
-the k-d tree stage picked:
+:func:`scan` implements :mod:`.radar` steps 2-4, one ego at a time, for the candidate targets
+:func:`candidates` picked:
 
 1. each candidate's vertex azimuths give its angular interval [lo, hi] (clipped to the field of
    view); targets straddling the rear (span >= pi) or outside the field of view are dropped;

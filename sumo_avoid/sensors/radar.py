@@ -34,9 +34,9 @@ Model, per ego and scan:
 Not modelled: merging of targets closer than the angular resolution, multipath, multiple
 reflections per target, elevation. ``Detections.target`` (the true id) is for evaluation only.
 
-Steps 1 and 5-7 are numpy here (a k-d tree picks step 1's candidates for all egos at once);
-steps 2-4 run in a compiled loop over egos, :mod:`.occlusion` (numba), bit-identical to the
-numpy formulation it replaced (kept as the reference in tests/radar_reference.py).
+Steps 5-7 are numpy here; the footprints, step 1 (a sweep along one axis instead of a k-d tree) and
+steps 2-4 run in compiled loops over egos, :mod:`.occlusion` (numba), bit-identical to the numpy /
+k-d tree formulation they replaced (kept as the reference in tests/radar_reference.py).
 """
 from __future__ import annotations
 
