@@ -194,15 +194,18 @@ class Radar:
         ptr = np.concatenate([[0], np.cumsum(np.bincount(e, minlength=len(rows)))]).astype(np.int64)
         ego, tgt, rng, az, vr = self._scan(spos, hd, svel, polys, vel, ptr, n, half, p.max_range_m)
         det = Detections(snap.time_s, tuple(ego_ids), spos, hd, svel, ego, rng, az, vr,
-                         tuple(ids[i] for i in tgt), mount=self.mount)
+                         tuple([ids[i] for i in tgt.tolist()]), mount=self.mount)
         return self._imperfect(det)
 
     def _imperfect(self, det: Detections) -> Detections:
         p, g = self.p, self.rng
         D = det.n
-        keep = g.random(D) < p.detection_prob if p.detection_prob < 1 else np.ones(D, bool)
-        e, r, a, v = det.ego[keep], det.range_m[keep], det.azimuth_rad[keep], det.radial_speed_mps[keep]
-        tgt = tuple(t for t, k in zip(det.target, keep) if k)
+        if p.detection_prob < 1:
+            keep = g.random(D) < p.detection_prob
+            e, r, a, v = det.ego[keep], det.range_m[keep], det.azimuth_rad[keep], det.radial_speed_mps[keep]
+            tgt = tuple([t for t, k in zip(det.target, keep.tolist()) if k])
+        else:
+            e, r, a, v, tgt = det.ego, det.range_m, det.azimuth_rad, det.radial_speed_mps, det.target
         r = r + g.normal(0.0, p.range_sigma_m, len(r)) if p.range_sigma_m else r
         v = v + g.normal(0.0, p.speed_sigma_mps, len(v)) if p.speed_sigma_mps else v
         a = a + g.normal(0.0, math.radians(p.azimuth_sigma_deg), len(a)) if p.azimuth_sigma_deg else a
