@@ -31,8 +31,10 @@ spinning BLAS thread of one side would otherwise take CPU from the other).
 Every line splits the plug-in's time into SUMO's ``simulationStep`` and the plug-in's own Python.
 ``--no-sumo-collisions`` runs both sides without SUMO's own collision check (its sublane check
 compares every pair of vehicles on a lane; a lane holding a vehicle moved by ``moveToXY`` is
-checked once more per step). ``--profile`` prints a cProfile summary of the plug-in side. Last
-line: ``plugin_s=X plain_s=Y ratio=Z``.
+checked once more per step). ``--profile`` prints a cProfile summary of the plug-in side. With
+turns, one more line gives the median of the paired per-turn ratios (plug-in turn k / plain turn
+k, the same steps): a burst of load from another tenant that hits a few turns of one side moves
+the sums but hardly the median. Last line: ``plugin_s=X plain_s=Y ratio=Z`` (the sums).
 """
 from __future__ import annotations
 
@@ -119,16 +121,25 @@ class Turns:
         self.counter = counter
         self.steps = 0
         self.waited = 0.0
+        self.turns: list[float] = []  # busy time of each of this side's turns, s
+        self._turn_t0: float | None = None
 
     def wait_turn(self, handing_over: bool = False) -> None:
         """Sleep until it is this side's turn. ``handing_over``: give the other side its turn first;
         the release is timed as waiting too, because on one CPU the woken side may run at once,
         inside the release call (measured: 1.2 ms per release on average)."""
         t0 = time.perf_counter()
+        self._end_turn(t0)
         if handing_over:
             self.theirs.release()
         self.mine.acquire()
-        self.waited += time.perf_counter() - t0
+        self._turn_t0 = time.perf_counter()
+        self.waited += self._turn_t0 - t0
+
+    def _end_turn(self, now: float) -> None:
+        if self._turn_t0 is not None:
+            self.turns.append(now - self._turn_t0)
+            self._turn_t0 = None
 
     def stepped(self) -> None:
         self.steps += 1
@@ -137,6 +148,7 @@ class Turns:
             self.wait_turn(handing_over=True)
 
     def finish(self) -> None:
+        self._end_turn(time.perf_counter())
         self.done[self.me] = 1
         self.theirs.release()
 
@@ -227,7 +239,8 @@ def side(which: str, toml: str, turns: Turns | None, profile: bool = False) -> d
             m = evaluate.compute(res)
             out.update(steps=res.steps, collisions=m["collisions"], radar_brakes=m["radar_brakes"],
                        radar_warnings=m["radar_warnings"])
-    return {**out, "busy_s": busy_s(t, turns), "sumo_step_s": t["sumo_step_s"]}
+    return {**out, "busy_s": busy_s(t, turns), "sumo_step_s": t["sumo_step_s"],
+            "turns_s": turns.turns if turns is not None else []}
 
 
 def _child(which, me, toml, cpu, sems, done, chunk, counter, profile, queue, run_side) -> None:
@@ -286,6 +299,20 @@ def _line(plain: dict, plugin: dict) -> str:
             f"own / plain {own / plain['busy_s']:.3f})")
 
 
+def paired_turns(plain: list[float], plugin: list[float]) -> str:
+    """The two sides' turns cover the same steps (turn k: steps k*chunk ...), so plug-in turn k /
+    plain turn k is a paired ratio; its median is insensitive to a burst of load from elsewhere
+    that hits a few turns of one side (the sums above are not). The last turn may be partial: left out."""
+    import numpy as np
+
+    k = min(len(plain), len(plugin)) - 1
+    if k < 1:
+        return "  paired turns: too few"
+    r = np.array(plugin[:k]) / np.array(plain[:k])
+    q1, med, q3 = np.percentile(r, [25, 50, 75])
+    return f"  paired turns ({k}, same steps): plug-in / plain median {med:.3f}, quartiles {q1:.3f}-{q3:.3f}"
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--vehicles", type=int, default=1000)
@@ -324,6 +351,7 @@ def main(argv=None) -> None:
             pl, pg = r["plain"], r["plugin"]
             plain_s, plugin_s = pl["busy_s"], pg["busy_s"]
             print(_line(pl, pg), flush=True)
+            print(paired_turns(pl["turns_s"], pg["turns_s"]), flush=True)
             how = f"taking turns every {a.chunk} steps on cpu {cpu}"
         print(f"vehicles {a.vehicles}  egos {len(egos)}  steps {pg['steps']}  controller {a.controller}  "
               f"collisions {pg['collisions']}  radar_brakes {pg['radar_brakes']}  radar_warnings {pg['radar_warnings']}"

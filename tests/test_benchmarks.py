@@ -26,6 +26,7 @@ def test_radar_benchmark_takes_turns_and_prints_its_last_line(net):
     assert (plugin_s - 0.005) / (plain_s + 0.005) - 0.005 <= ratio <= (plugin_s + 0.005) / (plain_s - 0.005) + 0.005
     # both sides ran all 10 steps and the plug-in drove its 5 egos with the radar in the loop
     assert "egos 5  steps 10" in out.stdout and f"net {net}" in out.stdout
+    assert re.search(r"paired turns \(3, same steps\): plug-in / plain median \d+\.\d{3}", out.stdout), out.stdout
     assert "steps: plain 10/10  plugin 10/10" in out.stderr
 
 
