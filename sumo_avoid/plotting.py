@@ -31,6 +31,7 @@ MEDIAN = "#f3d34a"
 EGO_COLOURS = ["#0046c7", "#d6007a", "#ff7f0e", "#00875a", "#7a2bd1", "#8c564b"]
 OTHER_COLOURS = ["#1b7a1b", "#8c564b", "#0e8a99", "#8a8a10", "#6a3d9a", "#505050"]
 _NICE = [1, 2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 25, 30, 40, 50]
+ZOOM_HALF_M = 30.0  # the close-up of a turn or a collision shows 60 m x 60 m
 
 
 def footprint_corners(x, y, heading, length, width) -> np.ndarray:
@@ -136,9 +137,6 @@ def plot_trajectories(road: "Road", traj: "pd.DataFrame", out_png, *, collisions
     ``obstacles``: list of (K,2) polygons. Very elongated extents (e.g. a 1.5 km straight)
     are drawn on a wide figure with a stated vertical exaggeration so the lanes stay readable.
     """
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Polygon as MplPolygon
-
     traj = traj.sort_values(["id", "step"] if "step" in traj else ["id", "time_s"])
     obstacles = [np.asarray(o, float).reshape(-1, 2) for o in (obstacles or [])]
     goals = {str(k): np.asarray(v, float).reshape(2) for k, v in (goals or {}).items()}
@@ -161,6 +159,48 @@ def plot_trajectories(road: "Road", traj: "pd.DataFrame", out_png, *, collisions
         fig_h = float(np.clip(fig_w * dy / dx + 0.8, 4.0, 12.0))
     fig = _new_figure((fig_w, fig_h))
     ax = fig.add_subplot(1, 1, 1)
+    is_ego = traj["is_ego"].astype(bool) if "is_ego" in traj else np.zeros(len(traj), bool)
+    ego_ids = list(dict.fromkeys(traj.loc[is_ego, "id"].astype(str)))
+    other_ids = list(dict.fromkeys(traj.loc[~is_ego, "id"].astype(str)))
+    groups = {str(k): g for k, g in traj.groupby(traj["id"].astype(str), sort=False)}
+    handles = _draw(ax, road, groups, ego_ids, other_ids, obstacles, goals, coll)
+    wide = exaggeration > 1 or fig_w / fig_h > 3
+    centre = None if wide else _zoom_centre(groups, ego_ids, coll)
+    legend_loc = "best"
+    if centre is not None and min(dx, dy) > 6 * ZOOM_HALF_M:  # only where the close-up is small against the view
+        corners = _emptiest_corners(traj, xmin, xmax, ymin, ymax)
+        inset = ax.inset_axes([*_CORNERS[corners[0]], 0.42, 0.42])
+        _draw(inset, road, groups, ego_ids, other_ids, obstacles, goals, coll, labels=False)
+        cx, cy = centre
+        inset.set_xlim(cx - ZOOM_HALF_M, cx + ZOOM_HALF_M)
+        inset.set_ylim(cy - ZOOM_HALF_M, cy + ZOOM_HALF_M)
+        inset.set_aspect(1.0)
+        inset.tick_params(labelsize=7)
+        inset.set_title(f"close-up, {2 * ZOOM_HALF_M:.0f} m across", fontsize=8)
+        ax.indicate_inset_zoom(inset, edgecolor="#333333")
+        legend_loc = corners[1]
+    ax.set_xlim(xmin, xmax)
+    ax.set_ylim(ymin, ymax)
+    ax.set_aspect(float(exaggeration))
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]" if exaggeration == 1 else f"y [m]  (vertical ×{exaggeration})")
+    ax.grid(True, color="white", alpha=0.35, lw=0.5)
+    if title:
+        ax.set_title(title)
+    if wide:
+        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.28), ncol=min(len(handles), 6),
+                  fontsize=8, frameon=False)
+    else:
+        ax.legend(handles=handles, loc=legend_loc, fontsize=8, framealpha=0.9)
+    return _save(fig, out_png)
+
+
+def _draw(ax, road, groups, ego_ids, other_ids, obstacles, goals, coll, labels: bool = True) -> list:
+    """Everything of a trajectory figure on one axes (the main view, or the close-up); returns the
+    legend handles."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Polygon as MplPolygon
+
     ax.set_facecolor(OFFROAD_FILL)
 
     patch = _area_patch(road.area, facecolor=ROAD_FILL, edgecolor="#6b6b6b", linewidth=0.8, zorder=0)
@@ -186,10 +226,6 @@ def plot_trajectories(road: "Road", traj: "pd.DataFrame", out_png, *, collisions
     if obstacles:
         handles.append(MplPolygon([[0, 0]], facecolor="#222222", label="obstacle"))
 
-    is_ego = traj["is_ego"].astype(bool) if "is_ego" in traj else np.zeros(len(traj), bool)
-    ego_ids = list(dict.fromkeys(traj.loc[is_ego, "id"].astype(str)))
-    other_ids = list(dict.fromkeys(traj.loc[~is_ego, "id"].astype(str)))
-    groups = {str(k): g for k, g in traj.groupby(traj["id"].astype(str), sort=False)}
 
     def outline(g, rows, colour, lw, z, ls="-"):
         c = footprint_corners(g["x"].to_numpy()[rows], g["y"].to_numpy()[rows], g["heading"].to_numpy()[rows],
@@ -227,28 +263,45 @@ def plot_trajectories(road: "Road", traj: "pd.DataFrame", out_png, *, collisions
 
     for x, y, label in coll:
         ax.plot(x, y, "x", ms=20, mew=4, color="#e00000", zorder=9)
-        ax.annotate(label, (x, y), xytext=(8, 8), textcoords="offset points", color="#b00000", fontsize=9,
-                    fontweight="bold", zorder=10, bbox=dict(boxstyle="round,pad=0.2", fc="white", ec="#e00000",
-                                                             alpha=0.85))
+        if labels:
+            ax.annotate(label, (x, y), xytext=(8, 8), textcoords="offset points", color="#b00000", fontsize=9,
+                        fontweight="bold", zorder=10, bbox=dict(boxstyle="round,pad=0.2", fc="white",
+                                                                 ec="#e00000", alpha=0.85))
     if coll:
         handles.append(Line2D([], [], ls="", marker="x", ms=10, mew=3, color="#e00000",
                               label=f"collision ({len(coll)})"))
 
-    ax.set_xlim(xmin, xmax)
-    ax.set_ylim(ymin, ymax)
-    ax.set_aspect(float(exaggeration))
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]" if exaggeration == 1 else f"y [m]  (vertical ×{exaggeration})")
-    ax.grid(True, color="white", alpha=0.35, lw=0.5)
-    if title:
-        ax.set_title(title)
-    wide = exaggeration > 1 or fig_w / fig_h > 3
-    if wide:
-        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.28), ncol=min(len(handles), 6),
-                  fontsize=8, frameon=False)
-    else:
-        ax.legend(handles=handles, loc="best", fontsize=8, framealpha=0.9)
-    return _save(fig, out_png)
+    return handles
+
+
+def _zoom_centre(groups, ego_ids, coll):
+    """Where a close-up helps: the first collision, else the middle of an ego's largest turn (the
+    point where its heading is halfway between start and end, if they differ by > 45 degrees, e.g.
+    a turn at a junction); None for a run that just goes along a road."""
+    if coll:
+        return float(coll[0][0]), float(coll[0][1])
+    for vid in ego_ids:
+        g = groups[vid]
+        h = np.unwrap(g["heading"].to_numpy(float))
+        if len(h) < 3 or abs(h[-1] - h[0]) < np.radians(45):
+            continue
+        k = int(np.argmax((h - h[0]) * np.sign(h[-1] - h[0]) >= 0.5 * abs(h[-1] - h[0])))
+        return float(g["x"].iloc[k]), float(g["y"].iloc[k])
+    return None
+
+
+_CORNERS = {"lower left": (0.09, 0.08), "lower right": (0.56, 0.08), "upper left": (0.09, 0.52),
+            "upper right": (0.56, 0.52)}  # lower-left corners (axes fraction) of a 0.42 x 0.42 close-up,
+# inset from the axes' edges so that its own tick labels do not cover the main ones
+
+
+def _emptiest_corners(traj, xmin, xmax, ymin, ymax) -> list[str]:
+    """The axes' four corners (boxes of 42 % x 42 %) ordered from the fewest trajectory points in them."""
+    fx = (traj["x"].to_numpy(float) - xmin) / (xmax - xmin)
+    fy = (traj["y"].to_numpy(float) - ymin) / (ymax - ymin)
+    count = {c: int(np.sum((fx >= x0) & (fx <= x0 + 0.42) & (fy >= y0) & (fy <= y0 + 0.42)))
+             for c, (x0, y0) in _CORNERS.items()}
+    return sorted(count, key=lambda c: (count[c], list(_CORNERS).index(c)))
 
 
 def _on_boundary(road, line) -> bool:

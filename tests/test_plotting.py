@@ -69,3 +69,21 @@ def test_plot_timeseries_writes_png(tmp_path):
     out = plot_timeseries(series, tmp_path / "ts.png", "synthetic metrics")
     p = pathlib.Path(out)
     assert p.exists() and p.stat().st_size > 10_000
+
+
+def test_turn_gets_a_close_up_and_a_straight_run_does_not():
+    """The middle of an ego's largest turn (heading change > 45 degrees) or its first collision is
+    where the close-up goes; a run along a road gets none. The close-up sits in the emptiest corner."""
+    from sumo_avoid.plotting import _emptiest_corners, _zoom_centre
+
+    t = np.linspace(0.0, np.pi / 2, 91)  # quarter circle of radius 20 m about (0, 0), heading north -> west
+    x, y = 20.0 * np.cos(t), 20.0 * np.sin(t)
+    g = pd.DataFrame({"x": x, "y": y, "heading": t + np.pi / 2})
+    cx, cy = _zoom_centre({"ego": g}, ["ego"], [])
+    assert (cx, cy) == pytest.approx((20.0 * np.cos(np.pi / 4), 20.0 * np.sin(np.pi / 4)), abs=0.3)
+    straight = pd.DataFrame({"x": np.linspace(0, 500, 50), "y": 0.0, "heading": 0.1 * np.sin(np.arange(50))})
+    assert _zoom_centre({"ego": straight}, ["ego"], []) is None
+    assert _zoom_centre({"ego": straight}, ["ego"], [(100.0, 2.0, "ego × car")]) == (100.0, 2.0)
+    pts = pd.DataFrame({"x": [90.0, 95.0, 10.0], "y": [90.0, 95.0, 90.0]})  # two in the upper right, one upper left
+    order = _emptiest_corners(pts, 0.0, 100.0, 0.0, 100.0)
+    assert order[:2] == ["lower left", "lower right"] and order[-1] == "upper right"
