@@ -211,7 +211,8 @@ def _row(spec: RunSpec, res: dict, root: pathlib.Path) -> dict:
             "controller": spec.effective_controller, "seed": spec.seed, "overrides": json.dumps(list(spec.overrides)),
             "status": res["status"], "error": res.get("error"), "started_at": res.get("started_at"),
             "ended_at": res.get("ended_at"), "wall_s": res.get("wall_s"), "overhead_s": res.get("overhead_s"),
-            "artifacts": os.path.relpath(res["artifacts"], root.parent) if res.get("artifacts") else None}
+            "artifacts": os.path.relpath(res["artifacts"], root.parent) if res.get("artifacts") else None,
+            "code": ledger_mod.code_version()}
 
 
 class _Progress:
@@ -279,6 +280,10 @@ def run_batch(cfg: BatchConfig, progress: bool | None = None, log=print) -> dict
         counts = {"total": len(cfg.runs), "skipped": len(cfg.runs) - len(todo), "done": 0, "failed": 0}
         if counts["skipped"]:
             log(f"ledger {cfg.ledger}: {counts['skipped']} of {len(cfg.runs)} runs already recorded, skipped")
+            old = ledger_mod.made_by_other_code(con, (s.key for s in cfg.runs), ledger_mod.code_version())
+            if old:
+                log(f"  warning: {old} of them were made by other plug-in code than this ({ledger_mod.code_version()}, "
+                    "ledger column `code`); kept, not re-run: use a new ledger to re-run them")
         if todo and not cfg.scheduler and (cfg.start or worker.default_start()) == "fork":
             worker.prestart()  # the fork server imports while the ledger is read and the pool starts
         bar = _Progress(len(todo), progress)

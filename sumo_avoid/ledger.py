@@ -11,6 +11,7 @@ Read it with ``pandas.read_sql("SELECT * FROM runs", sqlite3.connect(path))`` or
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import json
 import pathlib
@@ -32,6 +33,7 @@ FIXED = {  # column -> SQL type; metric columns are added after these
     "wall_s": "REAL",
     "overhead_s": "REAL",
     "artifacts": "TEXT",
+    "code": "TEXT",  # code_version() of the plug-in that made the row
 }
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
@@ -71,6 +73,35 @@ def scalar_metrics(metrics: dict) -> dict:
         if v is None or isinstance(v, (bool, int, float, str)):
             out[k] = int(v) if isinstance(v, bool) else v
     return out
+
+
+@functools.lru_cache(maxsize=1)
+def code_version() -> str:
+    """16 hex digits naming the plug-in's code: sha256 of every ``sumo_avoid/**/*.py`` (path and
+    bytes) and SUMO's version. A run key covers a run's inputs, not the code; this column tells
+    rows made by different code apart."""
+    from importlib import metadata
+
+    root = pathlib.Path(__file__).resolve().parent
+    h = hashlib.sha256()
+    for f in sorted(root.rglob("*.py")):
+        h.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes() + b"\0")
+    with contextlib.suppress(metadata.PackageNotFoundError):
+        h.update(metadata.version("eclipse-sumo").encode())
+    return h.hexdigest()[:16]
+
+
+def made_by_other_code(con: sqlite3.Connection, keys, code: str) -> int:
+    """How many of the ``done`` rows among ``keys`` were made by code other than ``code`` (or by a
+    version that did not record it)."""
+    keys = set(keys)
+    if not keys:
+        return 0
+    if "code" not in columns(con):
+        rows = con.execute("SELECT key, NULL FROM runs WHERE status = 'done'")
+    else:
+        rows = con.execute("SELECT key, code FROM runs WHERE status = 'done'")
+    return sum(1 for k, c in rows if k in keys and c != code)
 
 
 def status_of(con: sqlite3.Connection) -> dict[str, str]:

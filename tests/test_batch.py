@@ -141,6 +141,14 @@ def test_crashes_cost_only_their_run_and_sigkilled_batch_resumes(tmp_path):
 
     r = _cli("batch", bf)  # a third time: nothing left to do
     assert "42 of 42 runs already recorded" in r.stdout and ledger.row_hashes(db) == after
+    assert (done["code"] == ledger.code_version()).all() and "other plug-in code" not in r.stdout
+
+    with sqlite3.connect(db) as con:  # as if two runs had been made by an earlier version of the code
+        con.execute("UPDATE runs SET code = 'earlier' WHERE key IN (SELECT key FROM runs WHERE status = 'done' LIMIT 2)")
+    before = ledger.row_hashes(db)
+    r = _cli("batch", bf)
+    assert "warning: 2 of them were made by other plug-in code" in r.stdout
+    assert ledger.row_hashes(db) == before  # told, not re-run or rewritten
 
 
 def test_ctrl_c_kills_the_running_runs_and_records_none_of_them(tmp_path):

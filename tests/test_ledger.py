@@ -58,3 +58,15 @@ def test_status_is_checked_and_export_writes_csv(tmp_path):
     assert pd.read_csv(files[0])["key"].tolist() == ["a"]
     for f in files[1:]:  # parquet only when pyarrow is installed
         assert f.suffix == ".parquet" and f.is_file()
+
+
+def test_code_version_and_rows_made_by_other_code(tmp_path):
+    v = ledger.code_version()
+    assert len(v) == 16 and int(v, 16) >= 0 and v == ledger.code_version()
+    con = ledger.connect(tmp_path / "l.sqlite")
+    ledger.record(con, {**_row("a"), "code": v})
+    ledger.record(con, {**_row("b"), "code": "0123456789abcdef"})
+    ledger.record(con, _row("c"))  # no code recorded (made before the column existed)
+    ledger.record(con, {**_row("d", "failed", "boom"), "code": "0123456789abcdef"})  # failed: re-run anyway
+    assert ledger.made_by_other_code(con, ["a", "b", "c", "d"], v) == 2
+    assert ledger.made_by_other_code(con, ["a"], v) == 0 and ledger.made_by_other_code(con, [], v) == 0
