@@ -190,6 +190,8 @@ def plot_trajectories(road: "Road", traj: "pd.DataFrame", out_png, *, collisions
     if wide:
         ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.28), ncol=min(len(handles), 6),
                   fontsize=8, frameon=False)
+    elif fig_h / fig_w > 1.5:  # a narrow tall road fills the axes' width: the legend goes beside it
+        ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, frameon=False)
     else:
         ax.legend(handles=handles, loc=legend_loc, fontsize=8, framealpha=0.9)
     return _save(fig, out_png)
