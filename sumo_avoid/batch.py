@@ -280,9 +280,10 @@ def run_batch(cfg: BatchConfig, progress: bool | None = None, log=print) -> dict
         counts = {"total": len(cfg.runs), "skipped": len(cfg.runs) - len(todo), "done": 0, "failed": 0}
         if counts["skipped"]:
             log(f"ledger {cfg.ledger}: {counts['skipped']} of {len(cfg.runs)} runs already recorded, skipped")
-            old = ledger_mod.made_by_other_code(con, (s.key for s in cfg.runs), ledger_mod.code_version())
+            code = ledger_mod.code_version()
+            old = ledger_mod.made_by_other_code(con, (s.key for s in cfg.runs), code)
             if old:
-                log(f"  warning: {old} of them were made by other plug-in code than this ({ledger_mod.code_version()}, "
+                log(f"  warning: {old} of them were made by other plug-in code than this ({code}, "
                     "ledger column `code`); kept, not re-run: use a new ledger to re-run them")
         if todo and not cfg.scheduler and (cfg.start or worker.default_start()) == "fork":
             worker.prestart()  # the fork server imports while the ledger is read and the pool starts

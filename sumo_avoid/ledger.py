@@ -95,13 +95,9 @@ def made_by_other_code(con: sqlite3.Connection, keys, code: str) -> int:
     """How many of the ``done`` rows among ``keys`` were made by code other than ``code`` (or by a
     version that did not record it)."""
     keys = set(keys)
-    if not keys:
-        return 0
-    if "code" not in columns(con):
-        rows = con.execute("SELECT key, NULL FROM runs WHERE status = 'done'")
-    else:
-        rows = con.execute("SELECT key, code FROM runs WHERE status = 'done'")
-    return sum(1 for k, c in rows if k in keys and c != code)
+    col = "code" if "code" in columns(con) else "NULL"  # a ledger from before the column
+    return sum(1 for k, c in con.execute(f"SELECT key, {col} FROM runs WHERE status = 'done'")
+               if k in keys and c != code)
 
 
 def status_of(con: sqlite3.Connection) -> dict[str, str]:

@@ -8,35 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from scipy.spatial import cKDTree
-
+from .geometry import near_any
 from .snapshot import Snapshot
 
 COLUMNS = ["step", "time_s", "id", "is_ego", "x", "y", "vx", "vy", "speed", "heading", "length", "width"]
-
-
-def near_any(points: np.ndarray, centres: np.ndarray, radius_m: float) -> np.ndarray:
-    """(N,) bool: which ``points`` (N, 2) lie within ``radius_m`` of any of ``centres`` (M, 2).
-
-    First each point is tried against the centres just before and after it along the axis the
-    centres spread most on (usually enough when they are spread along a road); only the points
-    this does not settle go to a k-d tree over all centres. Same distances (sqrt(dx^2 + dy^2)) and
-    the same test as the k-d tree alone, so the same answer."""
-    N, M = len(points), len(centres)
-    if N == 0 or M == 0:
-        return np.zeros(N, bool)
-    ax = int(np.ptp(centres[:, 1]) > np.ptp(centres[:, 0]))
-    order = np.argsort(centres[:, ax], kind="stable")
-    i = np.searchsorted(centres[order, ax], points[:, ax])
-    near = np.zeros(N, bool)
-    for j in (np.maximum(i - 1, 0), np.minimum(i, M - 1)):
-        d = points - centres[order[j]]
-        near |= np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]) <= radius_m
-    rest = np.flatnonzero(~near)
-    if len(rest):
-        dist, _ = cKDTree(centres).query(points[rest], k=1, distance_upper_bound=radius_m * (1 + 1e-9))
-        near[rest] = dist <= radius_m
-    return near
 
 
 class Recorder:

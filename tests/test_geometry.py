@@ -3,11 +3,13 @@ import math
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 
 from sumo_avoid.geometry import (
     convex_distance,
     convex_overlap,
     footprint_corners,
+    near_any,
     pairwise_footprint_distance,
     point_segment_distance,
 )
@@ -166,3 +168,25 @@ def test_random_cross_check_against_shapely():
         np.testing.assert_array_equal(convex_overlap(P, B), ref == 0)
         assert shapely.distance(gP, shapely.points(p)).max() < 1e-9
         assert shapely.distance(gB, shapely.points(q)).max() < 1e-9
+
+
+def test_near_any_hand_values():
+    centres = np.array([[0.0, 0.0], [100.0, 0.0]])
+    points = np.array([[3.0, 4.0], [5.0, 0.0001], [50.0, 0.0], [103.0, -4.0], [0.0, 5.0]])
+    # distances to the nearer centre: 5, 5.000000001, 50, 5, 5
+    assert near_any(points, centres, 5.0).tolist() == [True, False, False, True, True]
+    assert near_any(points, centres, 50.0).tolist() == [True, True, True, True, True]
+    assert near_any(points, centres[:0], 5.0).tolist() == [False] * 5
+
+
+def test_near_any_equals_the_kdtree_answer():
+    """The sweep settles most points; the rest go to the k-d tree: together the k-d tree's answer,
+    on random layouts (points far from every centre along the sweep axis included) and a road along y."""
+    rng = np.random.default_rng(3)
+    for k in range(300):
+        n, m = int(rng.integers(1, 300)), int(rng.integers(1, 40))
+        scale = rng.uniform(1, 1000, 2)
+        p, c = rng.uniform(0, 1, (n, 2)) * scale, rng.uniform(0, 1, (m, 2)) * scale
+        r = float(rng.uniform(0, 300))
+        ref = cKDTree(c).query(p, k=1, distance_upper_bound=r * (1 + 1e-9))[0] <= r
+        assert np.array_equal(near_any(p, c, r), ref), k

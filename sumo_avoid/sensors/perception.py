@@ -88,9 +88,7 @@ def radar_obstacles(obs, known_pos, gate_m: float):
     within ``gate_m`` of a ``known_pos`` (vehicles known otherwise, e.g. flock members over V2V;
     no target ids used). Returns (corners (B,4,2), velocities (B,2), owner (B,) index into
     ``obs.ego_ids``)."""
-    from scipy.spatial import cKDTree
-
-    from ..geometry import footprint_corners
+    from ..geometry import footprint_corners, near_any
 
     scans = obs.detections if isinstance(obs.detections, tuple) else (obs.detections,)
     row_of = {v: k for k, v in enumerate(obs.ego_ids)}
@@ -98,7 +96,6 @@ def radar_obstacles(obs, known_pos, gate_m: float):
     pos, hd, ln, wd, vel = (np.concatenate([b[i] for b, _ in parts]) for i in range(5))
     owner = np.concatenate([o for _, o in parts])
     if len(pos) and len(known_pos):
-        d, _ = cKDTree(known_pos).query(pos, k=1, distance_upper_bound=gate_m)
-        keep = ~(d <= gate_m)
+        keep = ~near_any(pos, known_pos, gate_m)
         pos, hd, ln, wd, vel, owner = pos[keep], hd[keep], ln[keep], wd[keep], vel[keep], owner[keep]
     return footprint_corners(pos, hd, ln, wd), vel, owner
