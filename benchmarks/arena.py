@@ -5,7 +5,9 @@ stepped in plain SUMO without the plug-in's computation, in the same process run
 
 ``wall_s``: runner.run() (SUMO + snapshot + flocking controller + relaxation actuator + recorder);
 ``plain_s``: the same N vehicles spawned the same way, each step read back and moved by moveToXY
-along their current velocity (no controller, no recorder); metric computation is timed apart.
+along their current velocity (no controller, no recorder); metric computation is timed apart:
+``metrics`` = all of evaluate.compute(); ``flocking metrics`` = order.flocking_metrics() alone (SPEC
+§1.1-1.2 order parameters and μ), timed again on the same table after it.
 Also times the controller's neighbour search, dense distance matrix vs scipy cKDTree, by N.
 Last line: ``wall_s=X plain_s=Y ratio=Z``.
 """
@@ -64,6 +66,7 @@ def neighbours() -> None:
 
 def main() -> None:
     from sumo_avoid import evaluate, runner, scenario
+    from sumo_avoid.order import flocking_metrics
 
     ap = argparse.ArgumentParser()
     ap.add_argument("--agents", type=int, default=100)
@@ -79,8 +82,16 @@ def main() -> None:
     wall = time.perf_counter() - t0
     t1 = time.perf_counter()
     m = evaluate.compute(res)
+    metrics_s = time.perf_counter() - t1
     print(f"arena run: N={a.agents} {a.duration:.0f} s, {res.steps} steps; loop {res.timings['loop_s']:.2f} s; "
-          f"metrics {time.perf_counter() - t1:.2f} s; mu {m['mu']:.3f}")
+          f"metrics {metrics_s:.2f} s; mu {m['mu']:.3f}")
+    prm = res.scenario.params
+    t2 = time.perf_counter()
+    f = flocking_metrics(res.traj, v_flock=prm.v_flock_mps, r_c_m=prm.r_c_m, phi_coll=m["phi_coll"],
+                         phi_wall=m["phi_wall"])
+    print(f"flocking metrics (order.flocking_metrics alone, {len(res.traj)} rows): {time.perf_counter() - t2:.2f} s "
+          f"(part of the metrics {metrics_s:.2f} s); mu {f['mu']:.3f}, "
+          f"{'same' if f['mu'] == m['mu'] else 'NOT the same'}")
     p = plain(scn)
     print(f"wall_s={wall:.2f} plain_s={p:.2f} ratio={wall / p:.2f}")
 
