@@ -21,8 +21,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
 def plain(scn) -> float:
-    from sumo_avoid.arena import random_positions, square
-    from sumo_avoid.sim import SumoSim, sumo_args
+    from sumo_avoid.rollout.arena import random_positions, square
+    from sumo_avoid.sumo.sim import SumoSim, sumo_args
 
     spec, arena = scn.spec, scn.spec.arena
     t0 = time.perf_counter()
@@ -44,7 +44,7 @@ def plain(scn) -> float:
 
 
 def neighbours() -> None:
-    from sumo_avoid.controllers.flocking import neighbour_pairs
+    from sumo_avoid.control.flocking import neighbour_pairs
 
     rng = np.random.default_rng(0)
     print("neighbour pairs within 80 m, density 100 per 250 m square (ms per call):")
@@ -63,7 +63,9 @@ def neighbours() -> None:
 
 
 def main() -> None:
-    from sumo_avoid import evaluate, runner, scenario
+    from sumo_avoid import outputs as evaluate
+    from sumo_avoid.rollout import runner
+    from sumo_avoid.scenario import spec as scenario
 
     ap = argparse.ArgumentParser()
     ap.add_argument("--agents", type=int, default=100)

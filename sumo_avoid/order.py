@@ -1,5 +1,5 @@
 """Order parameters of a flocking run (SPEC §1.1) and its fitness μ (SPEC §1.2, via
-:func:`sumo_avoid.metrics.fitness`), computed from the recorded table (pure, no SUMO).
+:func:`sumo_avoid.metrics.basic.fitness`), computed from the recorded table (pure, no SUMO).
 
 Only the controlled vehicles (``is_ego``) are the flock: N = number of egos at a step. Every
 quantity is a time-average over the recorded steps (constant step, so dt cancels):
@@ -24,7 +24,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from .metrics import fitness
+from sumo_avoid.metrics.basic import fitness
 
 R_COLL_M = 3.0
 

@@ -13,7 +13,9 @@ def scenario_path():
 
 def run_scenario(name: str, **kw):
     """Run a real scenario in real SUMO (libsumo) and return (RunResult, metrics dict)."""
-    from sumo_avoid import evaluate, runner, scenario
+    from sumo_avoid import outputs as evaluate
+    from sumo_avoid.rollout import runner
+    from sumo_avoid.scenario import spec as scenario
 
     scn = scenario.load(SCENARIOS / f"{name}.toml", kw.pop("overrides", []), **kw)
     res = runner.run(scn)

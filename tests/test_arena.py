@@ -9,9 +9,11 @@ import pathlib
 import numpy as np
 import pytest
 
-from sumo_avoid import evaluate, runner, scenario
-from sumo_avoid.arena import outside_distance, random_positions, relax, square
-from sumo_avoid.config import ScenarioError
+from sumo_avoid import outputs as evaluate
+from sumo_avoid.rollout import runner
+from sumo_avoid.scenario import spec as scenario
+from sumo_avoid.rollout.arena import outside_distance, random_positions, relax, square
+from sumo_avoid.core.config import ScenarioError
 
 SCN = pathlib.Path(__file__).resolve().parents[1] / "scenarios"
 FLOCK_KEYS = ("phi_corr", "phi_coll", "phi_wall", "v_vel", "n_disc", "n_min", "mu_speed", "mu_coll", "mu_disc",
@@ -68,7 +70,7 @@ def test_arena_runs_in_sumo_with_all_metrics(small_v4):
         assert k in m and m[k] is not None, k
     assert 0.0 <= m["mu"] <= 1.0
     # the flock got going at about v_flock (relaxation from rest, tau = 1 s) and stayed in the square;
-    # the actuation noise (0.28 m/s kicks per step, sumo_avoid.noise) lets single speeds exceed v_flock
+    # the actuation noise (0.28 m/s kicks per step, sumo_avoid.core.noise) lets single speeds exceed v_flock
     late = ego[ego["time_s"] > 20.0]
     assert 3.0 < late["speed"].mean() <= 4.0 + 0.3
     assert ego["x"].between(-2, 252).all() and ego["y"].between(-2, 252).all()
@@ -110,7 +112,7 @@ def test_highway_flock_keeps_to_the_road_among_traffic():
 
 
 def test_relaxation_step_adds_the_velocity_kick_before_moving():
-    from sumo_avoid.arena import relaxation_step
+    from sumo_avoid.rollout.arena import relaxation_step
 
     # v = 2 m/s along x, v_des the same (no relaxation); kick (0, 1) m/s; dt 0.2 s
     pos, vel, head, speed = relaxation_step(np.zeros((1, 2)), np.array([[2.0, 0.0]]), np.zeros(1),

@@ -7,12 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from sumo_avoid.arena import relaxation_step, square
-from sumo_avoid.controllers import REGISTRY
-from sumo_avoid.controllers.flocking import (PRESETS, FlockingController, FlockingParams, combine, friction,
-                                             neighbour_pairs, polygon_shills, preset, repulsion, segment_shills,
-                                             shill)
-from sumo_avoid.metrics import braking_curve_D as D
+from sumo_avoid.rollout.arena import relaxation_step, square
+from sumo_avoid.control import REGISTRY
+from sumo_avoid.control.flocking import PRESETS, FlockingController, FlockingParams, combine, friction, neighbour_pairs, polygon_shills, preset, repulsion, segment_shills, shill
+from sumo_avoid.metrics.basic import braking_curve_D as D
 
 P4 = preset("paper_v4")
 
@@ -167,10 +165,10 @@ def test_wall_turns_a_vehicle_back():
 def test_radar_flock_drops_v2v_members_and_keeps_each_egos_own_returns():
     """sensor = "radar": ego a sees member b (dropped: b is known over V2V) and car c; ego b sees
     nothing ahead. Only a feels c's shill (owner mask), and c's box is where the radar put it."""
-    from sumo_avoid.controllers.base import Observation
-    from sumo_avoid.sensors.perception import radar_obstacles
-    from sumo_avoid.sensors.radar import Radar, RadarParams
-    from sumo_avoid.snapshot import Snapshot
+    from sumo_avoid.core.types import Observation
+    from sumo_avoid.sensing.perception import radar_obstacles
+    from sumo_avoid.sensing.radar import Radar, RadarParams
+    from sumo_avoid.core.snapshot import Snapshot
 
     ids = ("a", "b", "c")
     pos = np.array([[0.0, 0.0], [15.0, 0.0], [30.0, 12.0]])

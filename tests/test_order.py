@@ -7,8 +7,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from sumo_avoid.arena import outside_distance, square
-from sumo_avoid.metrics import phi_coll, phi_wall
+from sumo_avoid.rollout.arena import outside_distance, square
+from sumo_avoid.metrics.basic import phi_coll, phi_wall
 from sumo_avoid.order import flocking_metrics, order_parameters
 
 

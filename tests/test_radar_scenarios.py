@@ -4,7 +4,9 @@ import re
 
 import pytest
 
-from sumo_avoid import evaluate, runner, scenario
+from sumo_avoid import outputs as evaluate
+from sumo_avoid.rollout import runner
+from sumo_avoid.scenario import spec as scenario
 
 SCN = pathlib.Path(__file__).resolve().parent.parent / "scenarios"
 
