@@ -12,7 +12,8 @@ import pytest
 from sumo_avoid import outputs as evaluate
 from sumo_avoid.rollout import runner
 from sumo_avoid.scenario import spec as scenario
-from sumo_avoid.rollout.arena import outside_distance, random_positions, relax, square
+from sumo_avoid.actuation.relaxation import relax
+from sumo_avoid.rollout.arena import outside_distance, random_positions, square
 from sumo_avoid.core.config import ScenarioError
 
 SCN = pathlib.Path(__file__).resolve().parents[1] / "scenarios"
@@ -23,7 +24,7 @@ FLOCK_KEYS = ("phi_corr", "phi_coll", "phi_wall", "v_vel", "n_disc", "n_min", "m
 def _run(name, *sets, seed=3):
     scn = scenario.load(SCN / name, list(sets), seed=seed)
     res = runner.run(scn)
-    return res, evaluate.compute(res)
+    return res, evaluate.run_metrics(res)
 
 
 @pytest.fixture(scope="module")
@@ -85,9 +86,9 @@ def test_same_seed_same_metrics(small_v4):
 
 def test_obstacles_are_avoided_and_passed_to_the_run():
     res, m = _run("arena_obstacles.toml", "arena.n_agents=20", "sim.duration_s=60", seed=2)
-    assert len(res.obstacles) == 4
+    assert len(res.scene.obstacles) == 4
     ego = res.traj[res.traj["is_ego"]]
-    d = outside_distance(ego[["x", "y"]].to_numpy(), res.walls, res.obstacles)
+    d = outside_distance(ego[["x", "y"]].to_numpy(), res.scene.walls, res.scene.obstacles)
     assert d.max() < 2.0  # nobody deeper than 2 m into an obstacle or beyond a wall
     assert m["phi_wall"] < 2.0 and m["mu_wall"] > 0.3
 
@@ -112,7 +113,7 @@ def test_highway_flock_keeps_to_the_road_among_traffic():
 
 
 def test_relaxation_step_adds_the_velocity_kick_before_moving():
-    from sumo_avoid.rollout.arena import relaxation_step
+    from sumo_avoid.actuation.relaxation import relaxation_step
 
     # v = 2 m/s along x, v_des the same (no relaxation); kick (0, 1) m/s; dt 0.2 s
     pos, vel, head, speed = relaxation_step(np.zeros((1, 2)), np.array([[2.0, 0.0]]), np.zeros(1),

@@ -9,7 +9,7 @@ import pytest
 
 from sumo_avoid.rollout.arena import outside_distance, square
 from sumo_avoid.metrics.basic import phi_coll, phi_wall
-from sumo_avoid.order import flocking_metrics, order_parameters
+from sumo_avoid.metrics.order import flocking_metrics, order_parameters
 
 
 def _table(rows):

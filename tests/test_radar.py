@@ -282,7 +282,7 @@ def test_tracker_coasts_along_the_given_traffic_direction():
 
 
 def test_route_directions_hand_values():
-    from sumo_avoid.rollout.runner import route_directions
+    from sumo_avoid.core.polyline import route_directions
 
     path = np.array([[0.0, 0.0], [100.0, 0.0], [100.0, 100.0]])
     d = route_directions([path, None, path], np.array([[50.0, 2.0], [0.0, 0.0], [100.0, 50.0]]),

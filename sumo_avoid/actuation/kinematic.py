@@ -12,25 +12,14 @@ Pure numpy, vectorised over egos; no SUMO here.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from sumo_avoid.scenario.spec import ActuatorConfig
+from sumo_avoid.actuation.params import ActuatorConfig
+from sumo_avoid.core.geometry import wrap_angle
+from sumo_avoid.core.snapshot import Snapshot
+from sumo_avoid.core.types import EgoTask, Motion, Observation
 
 _REVERSE_ANGLE = np.radians(90.0)
-
-
-def wrap_angle(a):
-    """Wrap radians to [-pi, pi)."""
-    return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
-
-
-@dataclass(frozen=True)
-class Motion:
-    pos: np.ndarray  # (E, 2) new centre, m
-    heading: np.ndarray  # (E,) new heading, rad
-    speed: np.ndarray  # (E,) new signed speed along the heading, m/s (negative = reversing)
 
 
 def actuate(pos, heading, speed, v_des, limits: ActuatorConfig, dt_s: float) -> Motion:
@@ -73,3 +62,34 @@ def actuate(pos, heading, speed, v_des, limits: ActuatorConfig, dt_s: float) -> 
     step = new_speed * dt_s
     new_pos = pos + np.column_stack([np.cos(mid), np.sin(mid)]) * step[:, None]
     return Motion(new_pos, new_heading, new_speed)
+
+
+class KinematicActuator:
+    """The kinematic car above (``actuator.mode = "kinematic"``); holds each ego's signed speed
+    (SUMO cannot report a reversing speed)."""
+
+    def __init__(self, limits: ActuatorConfig, dt_s: float):
+        self.p, self.dt = limits, dt_s
+        self._speed: dict[str, float] = {}  # ego id -> signed speed (NaN: not moved yet), m/s
+
+    def add_ego(self, task: EgoTask) -> None:
+        self._speed[task.vid] = np.nan
+
+    def remove_ego(self, vid: str) -> None:
+        self._speed.pop(vid, None)
+
+    def stats(self) -> dict:
+        return {}
+
+    def held(self, snap: Snapshot) -> Snapshot:
+        return snap
+
+    def speeds(self, snap: Snapshot, ego_ids) -> np.ndarray:
+        held = np.array([self._speed[v] for v in ego_ids])
+        return np.where(np.isnan(held), snap.speed[[snap.index[v] for v in ego_ids]], held)
+
+    def step(self, obs: Observation, command: np.ndarray) -> Motion:
+        snap, rows = obs.snapshot, obs.ego_rows
+        motion = actuate(snap.pos[rows], snap.heading[rows], obs.ego_speed, command, self.p, self.dt)
+        self._speed.update(zip(obs.ego_ids, motion.speed.tolist()))
+        return motion

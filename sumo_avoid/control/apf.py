@@ -27,9 +27,9 @@ import numpy as np
 
 from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.geometry import convex_distance, footprint_corners, point_segment_distance
-from sumo_avoid.sumo.road import polyline_point_at, polyline_project
+from sumo_avoid.core.polyline import polyline_point_at, polyline_project
 from sumo_avoid.sensing.perception import obstacle_vehicles
-from sumo_avoid.core.types import EgoTask, Observation
+from sumo_avoid.core.types import EgoTask, Needs, Observation
 
 
 @dataclass(frozen=True)
@@ -90,12 +90,13 @@ def _unit(v):
 class ApfController:
     """Plain potential field (no escape from local minima)."""
 
-    params_cls = ApfParams
+    needs = Needs(goals=True)
+    metrics = ()  # metrics of its own beside the standard set
 
-    def __init__(self, params: ApfParams, road, rng: np.random.Generator):
+    def __init__(self, params: ApfParams, ctx):
         self.p = params
-        self.road = road
-        self.rng = rng
+        self.road = ctx.road
+        self.rng = ctx.rng()
         self.tasks: dict[str, EgoTask] = {}
         self.last_force: dict[str, float] = {}
 

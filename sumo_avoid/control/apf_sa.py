@@ -28,9 +28,9 @@ import numpy as np
 
 from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.geometry import footprint_corners, point_segment_distance
-from sumo_avoid.sumo.road import polyline_point_at, polyline_project
+from sumo_avoid.core.polyline import polyline_project, polyline_tangent
 from sumo_avoid.sensing.perception import obstacle_vehicles
-from sumo_avoid.control.apf import ApfController, ApfParams, _unit
+from sumo_avoid.control.apf import ApfController, ApfParams
 from sumo_avoid.core.types import EgoTask, Observation
 
 
@@ -65,8 +65,8 @@ class _EgoState:
 class ApfSaController(ApfController):
     params_cls = ApfSaParams
 
-    def __init__(self, params: ApfSaParams, road, rng: np.random.Generator):
-        super().__init__(params, road, rng)
+    def __init__(self, params: ApfSaParams, ctx):
+        super().__init__(params, ctx)
         self.state: dict[str, _EgoState] = {}
         self.escapes = 0
         self.failed_searches = 0
@@ -83,10 +83,7 @@ class ApfSaController(ApfController):
         return {"sa_escapes": self.escapes, "sa_failed_searches": self.failed_searches}
 
     def _lateral(self, task: EgoTask, q) -> float:
-        s = polyline_project(task.path, q)
-        a = polyline_point_at(task.path, s)
-        b = polyline_point_at(task.path, s + 1.0)
-        t, _ = _unit(b - a)
+        _, a, t = polyline_tangent(task.path, q)
         d = np.asarray(q) - a
         return float(t[0] * d[1] - t[1] * d[0])  # 2-D cross product: left of the path > 0
 
@@ -167,9 +164,7 @@ class ApfSaController(ApfController):
                 return v_des
             # back up against the route direction, so the nose straightens while the lateral
             # offset already won is kept (a three-point manoeuvre rather than undoing the turn)
-            task = self.tasks[obs.ego_ids[list(obs.ego_rows).index(row)]]
-            s = polyline_project(task.path, snap.pos[row])
-            tangent, _ = _unit(polyline_point_at(task.path, s + 1.0) - polyline_point_at(task.path, s))
+            _, _, tangent = polyline_tangent(self.tasks[snap.ids[row]].path, snap.pos[row])
             back = -tangent if float(tangent @ fwd) > 0.0 else -fwd
             return self.p.escape_reverse_speed_mps * back
         return v_des
@@ -209,9 +204,7 @@ class ApfSaController(ApfController):
         x0 = snap.pos[row].copy()
         # candidate footprints are aligned with the route (where the car would end up driving),
         # not with its momentary heading, which may point at the kerb after a manoeuvre
-        task = self.tasks[obs.ego_ids[list(obs.ego_rows).index(row)]]
-        s0 = polyline_project(task.path, x0)
-        t, _ = _unit(polyline_point_at(task.path, s0 + 1.0) - polyline_point_at(task.path, s0))
+        _, _, t = polyline_tangent(self.tasks[snap.ids[row]].path, x0)
         h, L, W = math.atan2(t[1], t[0]), snap.length[row], snap.width[row]
         U0 = float(self.field(obs, row, x0[None, :], target, heading=h).U[0])
         x, Ux, T = x0.copy(), U0, p.sa_t0
@@ -234,7 +227,5 @@ class ApfSaController(ApfController):
     def _leaves_basin(self, obs: Observation, row: int, x) -> bool:
         """Has the walk left the trap's basin? A footprint at x, aligned with the route, must have
         ``sa_free_ahead_m`` free in front of it (so the point is not just the next pocket)."""
-        task = self.tasks[obs.ego_ids[list(obs.ego_rows).index(row)]]
-        s = polyline_project(task.path, x)
-        t, _ = _unit(polyline_point_at(task.path, s + 1.0) - polyline_point_at(task.path, s))
+        _, _, t = polyline_tangent(self.tasks[obs.snapshot.ids[row]].path, x)
         return self._room_ahead(obs, row, at=np.asarray(x, float), heading=math.atan2(t[1], t[0])) >= self.p.sa_free_ahead_m

@@ -30,18 +30,20 @@ and velocities can carry Gaussian noise and/or the reference simulator's driftin
 """
 from __future__ import annotations
 
-import collections
-import math
 from dataclasses import dataclass, fields
 
 import numpy as np
+import shapely
+from scipy.spatial import cKDTree
+from shapely.geometry import MultiPolygon, Polygon
+from shapely.geometry.polygon import orient
 
 from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.geometry import ccw_polygon, footprint_corners, pad_polygons, ring_walls
-from sumo_avoid.metrics.basic import braking_curve_D as D
-from sumo_avoid.core.noise import DampedRandomWalk
+from sumo_avoid.core.curves import braking_curve_D as D
 from sumo_avoid.sensing.perception import radar_obstacles
-from sumo_avoid.core.types import EgoTask, Observation
+from sumo_avoid.sensing.v2v import V2VParams
+from sumo_avoid.core.types import EgoTask, Needs, Observation
 
 # seed Table 3 (GA-optimised values at v_flock = 4 / 6 / 8 m/s). v_max is printed only for
 # v_flock = 4 (8 m/s); we keep the same ratio v_max = 2 v_flock for 6 and 8 (assumption).
@@ -129,8 +131,6 @@ def _sum_by(idx, vecs, n):
 def neighbour_pairs(pos_i, pos_j, r_c, same=True, use_tree=False):
     """Ordered pairs (i, j, r_ij) with r_ij = |pos_i[i] - pos_j[j]| <= r_c (and i != j if ``same``)."""
     if use_tree:
-        from scipy.spatial import cKDTree
-
         m = cKDTree(pos_i).sparse_distance_matrix(cKDTree(pos_j), r_c, output_type="ndarray")
         i, j, r = m["i"].astype(np.int64), m["j"].astype(np.int64), m["v"]
         if same:  # (sparse_distance_matrix leaves out exactly coincident pairs, r = 0: no direction anyway)
@@ -240,32 +240,26 @@ def combine(v_tilde, p: FlockingParams):
 class FlockingController:
     """Vásárhelyi flocking (SPEC §1): repulsion, alignment, walls and obstacles as shill agents."""
 
-    params_cls = FlockingParams
-    uses_goals = False  # the flock has no goal: the runner never retires an ego for reaching one
+    needs = Needs(goals=False, v2v=True)  # a flock has no goal; members' states come over V2V
+    metrics = ("flocking",)  # order parameters and fitness (sumo_avoid.metrics.flocking)
 
-    def __init__(self, params: FlockingParams, road, rng: np.random.Generator):
+    def __init__(self, params: FlockingParams, ctx=None):
         self.p = params
-        self.rng = rng
         self.tasks: set[str] = set()
         self._area = None
         self._walls = (np.zeros((0, 2)), np.zeros((0, 2)), np.zeros((0, 2)))
-        if road is not None:
-            self._set_area(road.area)
-        self._history: collections.deque = collections.deque()
+        if ctx is not None and ctx.walls is not None:
+            self.set_walls(ctx.walls)
+        elif ctx is not None and ctx.road is not None:
+            self._set_area(ctx.road.area)
         self._last_update = -np.inf
         self._cache: dict[str, np.ndarray] = {}
         self._obs_key = None
         self._obs_polys = None
-        self._gps: DampedRandomWalk | None = None
-        self._gps_time = -math.inf
         self.updates = 0
 
     # --- walls ---------------------------------------------------------------------------------
     def _set_area(self, geom) -> None:
-        import shapely
-        from shapely.geometry import MultiPolygon
-        from shapely.geometry.polygon import orient
-
         polys = geom.geoms if isinstance(geom, MultiPolygon) else [geom]
         rings = []
         for pg in polys:
@@ -278,15 +272,11 @@ class FlockingController:
 
     def set_walls(self, polygon) -> None:
         """The allowed area is this polygon ((k,2) vertices, e.g. the arena square), not the road."""
-        from shapely.geometry import Polygon
-
         self._set_area(Polygon(ccw_polygon(polygon)))
 
     def outside(self, pos) -> np.ndarray:
         if self._area is None:
             return np.zeros(len(pos), bool)
-        import shapely
-
         return ~shapely.contains_xy(self._area, pos[:, 0], pos[:, 1])
 
     # --- protocol ------------------------------------------------------------------------------
@@ -300,38 +290,11 @@ class FlockingController:
     def stats(self) -> dict:
         return {"flocking_updates": self.updates}
 
-    def _sensed(self, snap, rows_now):
-        """Own state now, neighbours' state delay_s ago (+ noise); rows aligned with ``rows_now``."""
+    def v2v_params(self) -> V2VParams:
+        """The V2V link this flock talks over (delay, noise, GPS error: [controllers.flocking] keys)."""
         p = self.p
-        self._history.append((snap.time_s, snap.ids, snap.pos, snap.vel))
-        while len(self._history) > 1 and self._history[1][0] <= snap.time_s - p.delay_s + 1e-9:
-            self._history.popleft()
-        t0, ids0, pos0, vel0 = self._history[0]
-        own_pos, own_vel = snap.pos[rows_now].copy(), snap.vel[rows_now].copy()
-        if ids0 is snap.ids or ids0 == snap.ids:
-            nb_pos, nb_vel = pos0[rows_now].copy(), vel0[rows_now].copy()
-        else:
-            idx0 = {v: k for k, v in enumerate(ids0)}
-            r0 = np.array([idx0.get(snap.ids[r], -1) for r in rows_now])
-            have = r0 >= 0
-            nb_pos = np.where(have[:, None], pos0[np.maximum(r0, 0)], own_pos)
-            nb_vel = np.where(have[:, None], vel0[np.maximum(r0, 0)], own_vel)
-        if p.gps_sigma_m2ps2 > 0:  # the reference simulator's drifting GPS error (sumo_avoid.core.noise)
-            if self._gps is None:
-                self._gps = DampedRandomWalk(p.gps_sigma_m2ps2, p.gps_lambda_ps, self.rng)
-            keys = [snap.ids[r] for r in rows_now]
-            dt = max(p.update_period_s, snap.time_s - self._gps_time if math.isfinite(self._gps_time) else 0.0)
-            self._gps_time = snap.time_s
-            x, u = self._gps.step([(k, 0) for k in keys] + [(k, 1) for k in keys], dt)
-            e = len(rows_now)
-            own_pos, own_vel, nb_pos, nb_vel = own_pos + x[:e], own_vel + u[:e], nb_pos + x[e:], nb_vel + u[e:]
-        if p.pos_noise_m > 0 or p.vel_noise_mps > 0:
-            e = len(rows_now)
-            own_pos += self.rng.normal(0.0, p.pos_noise_m, (e, 2))
-            own_vel += self.rng.normal(0.0, p.vel_noise_mps, (e, 2))
-            nb_pos += self.rng.normal(0.0, p.pos_noise_m, (e, 2))
-            nb_vel += self.rng.normal(0.0, p.vel_noise_mps, (e, 2))
-        return own_pos, own_vel, nb_pos, nb_vel
+        return V2VParams(p.delay_s, p.pos_noise_m, p.vel_noise_mps, p.gps_sigma_m2ps2, p.gps_lambda_ps,
+                         p.update_period_s)
 
     def _static_polys(self, obstacles):
         key = tuple(id(o) for o in obstacles)
@@ -376,7 +339,7 @@ class FlockingController:
         if not due and all(v in self._cache for v in obs.ego_ids):
             return np.array([self._cache[v] for v in obs.ego_ids]).reshape(-1, 2)
         rows = obs.ego_rows
-        own_pos, own_vel, nb_pos, nb_vel = self._sensed(snap, rows)
+        own_pos, own_vel, nb_pos, nb_vel = obs.v2v.states(snap, rows)
         others = None
         if p.vehicles_as_obstacles and obs.detections is not None:  # radar: each ego its own returns
             others = radar_obstacles(obs, nb_pos + nb_vel * p.delay_s, p.v2v_gate_m)

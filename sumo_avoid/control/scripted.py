@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sumo_avoid.core.config import field_doc
-from sumo_avoid.core.types import EgoTask, Observation
+from sumo_avoid.core.types import EgoTask, Needs, Observation
 
 
 @dataclass(frozen=True)
@@ -32,7 +32,10 @@ class ScriptedParams:
 class ScriptedController:
     """Straight ahead at a fixed speed, blind (for crash tests)."""
 
-    def __init__(self, params: ScriptedParams, road=None, rng=None):
+    needs = Needs(goals=True)
+    metrics = ()  # metrics of its own beside the standard set
+
+    def __init__(self, params: ScriptedParams, ctx=None):
         self.p = params
         self._dir: dict[str, float] = {}
         self._start: dict[str, np.ndarray] = {}

@@ -11,6 +11,7 @@ all P of one size ``k`` and all Q of one size ``m``, and never loop over pairs i
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 #: Contact tolerance, m. Two shapes whose separation is at most this count as touching/overlapping.
 CONTACT_TOL_M = 1e-9
@@ -94,6 +95,11 @@ def point_segment_distance(p, a, b):
     a = np.asarray(a, float).reshape(-1, 2)
     b = np.asarray(b, float).reshape(-1, 2)
     return _closest_on_segments(p[:, None, :], a[None, :, :], b[None, :, :])
+
+
+def wrap_angle(a):
+    """Wrap radians to [-pi, pi)."""
+    return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
 
 
 def _edges(P):
@@ -333,8 +339,6 @@ def near_any(points: np.ndarray, centres: np.ndarray, radius_m: float) -> np.nda
         near |= np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]) <= radius_m
     rest = np.flatnonzero(~near)
     if len(rest):
-        from scipy.spatial import cKDTree
-
         dist, _ = cKDTree(centres).query(points[rest], k=1, distance_upper_bound=radius_m * (1 + 1e-9))
         near[rest] = dist <= radius_m
     return near

@@ -16,6 +16,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from sumo_avoid.core import geometry
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.patches import PathPatch
+from matplotlib.path import Path
+import shapely
+from matplotlib.lines import Line2D
+from matplotlib.patches import Polygon as MplPolygon
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -41,9 +48,6 @@ def footprint_corners(x, y, heading, length, width) -> np.ndarray:
 
 
 def _new_figure(figsize):
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     fig = Figure(figsize=figsize)
     FigureCanvasAgg(fig)
     return fig
@@ -59,9 +63,6 @@ def _save(fig, out_png) -> str:
 
 def _area_patch(geom, **kw):
     """PathPatch of a shapely (Multi)Polygon, holes included."""
-    from matplotlib.patches import PathPatch
-    from matplotlib.path import Path
-
     polys = getattr(geom, "geoms", [geom])
     verts, codes = [], []
     for poly in polys:
@@ -115,8 +116,6 @@ def _extent(traj, extra_pts, road):
     if not len(allp):
         xmin, ymin, xmax, ymax = road.bounds
     else:
-        import shapely
-
         (xmin, ymin), (xmax, ymax) = allp.min(axis=0), allp.max(axis=0)
         near = shapely.clip_by_rect(road.area, xmin - 8, ymin - 8, xmax + 8, ymax + 8)
         if not near.is_empty:  # show the full road width around the vehicles
@@ -200,9 +199,6 @@ def plot_trajectories(road: "Road", traj: "pd.DataFrame", out_png, *, collisions
 def _draw(ax, road, groups, ego_ids, other_ids, obstacles, goals, coll, labels: bool = True) -> list:
     """Everything of a trajectory figure on one axes (the main view, or the close-up); returns the
     legend handles."""
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Polygon as MplPolygon
-
     ax.set_facecolor(OFFROAD_FILL)
 
     patch = _area_patch(road.area, facecolor=ROAD_FILL, edgecolor="#6b6b6b", linewidth=0.8, zorder=0)
@@ -313,8 +309,6 @@ def _on_boundary(road, line) -> bool:
 
 
 def _points(xy):
-    import shapely
-
     return shapely.points(np.asarray(xy, float))
 
 

@@ -8,6 +8,8 @@ of every point to map a vehicle onto; the walls are the square, not the roads.
 from __future__ import annotations
 
 import numpy as np
+from shapely.geometry import Polygon
+import shapely
 
 
 def square(origin, size_m: float) -> np.ndarray:
@@ -19,8 +21,6 @@ def square(origin, size_m: float) -> np.ndarray:
 
 def allowed_area(walls, obstacles=()):
     """shapely geometry: the walls polygon minus the obstacle polygons."""
-    from shapely.geometry import Polygon
-
     area = Polygon(walls)
     for ob in obstacles:
         area = area.difference(Polygon(ob))
@@ -30,8 +30,6 @@ def allowed_area(walls, obstacles=()):
 def outside_distance(points, walls, obstacles=()) -> np.ndarray:
     """(M,2) points -> (M,) how far each is outside the allowed area (outside the walls or inside an
     obstacle), m; 0 inside. This is d_i of φ_wall (SPEC §1.1), for point agents (centres)."""
-    import shapely
-
     pts = np.asarray(points, float).reshape(-1, 2)
     area = allowed_area(walls, obstacles)
     out = np.zeros(len(pts))
@@ -49,8 +47,6 @@ def random_positions(rng: np.random.Generator, n: int, walls, obstacles=(), *, m
     """n points uniformly at random in the allowed area shrunk by ``margin_m``, pairwise at least
     ``min_spacing_m`` apart (sequential rejection sampling; deterministic for a seeded rng).
     Raises ValueError if they do not fit."""
-    import shapely
-
     area = allowed_area(walls, obstacles).buffer(-margin_m)
     if area.is_empty:
         raise ValueError("arena too small for the margin")
@@ -72,27 +68,27 @@ def random_positions(rng: np.random.Generator, n: int, walls, obstacles=(), *, m
     return out
 
 
-def relax(vel, v_des, tau_s: float, max_accel_mps2: float, dt_s: float):
-    """Reference-simulator vehicle response: dv/dt = (v_des - v)/τ with |dv/dt| <= a_max.
+class StaticObstacles:
+    """Set-up hook: the scenario's static obstacles as SUMO polygons (drawn, not driven into by SUMO)."""
 
-    vel, v_des (E,2) m/s. Returns (new velocity (E,2), acceleration used (E,2)); the caller moves
-    the vehicle by new_velocity·dt (semi-implicit Euler).
-    """
-    vel = np.asarray(vel, float).reshape(-1, 2)
-    acc = (np.asarray(v_des, float).reshape(-1, 2) - vel) / tau_s
-    a = np.hypot(acc[:, 0], acc[:, 1])
-    scale = np.where(a > max_accel_mps2, max_accel_mps2 / np.maximum(a, 1e-12), 1.0)
-    acc = acc * scale[:, None]
-    return vel + acc * dt_s, acc
+    def __init__(self, configs, polygons):
+        self.ids = [o.id for o in configs]
+        self.polygons = polygons
+
+    def setup(self, sim) -> None:
+        for pid, shape in zip(self.ids, self.polygons):
+            sim.add_polygon(pid, shape)
 
 
-def relaxation_step(pos, vel, heading, v_des, tau_s, max_accel_mps2, dt_s, kick=None):
-    """One step for every ego: returns (new centre (E,2), new velocity (E,2), heading (E,), speed (E,)).
-    The heading follows the velocity; a stopped vehicle keeps its heading. ``kick`` (E,2): velocity
-    noise added after the relaxation (the reference simulator's outer noise, :mod:`.noise`)."""
-    new_vel, _ = relax(vel, v_des, tau_s, max_accel_mps2, dt_s)
-    if kick is not None:
-        new_vel = new_vel + kick
-    speed = np.hypot(new_vel[:, 0], new_vel[:, 1])
-    head = np.where(speed > 1e-6, np.arctan2(new_vel[:, 1], new_vel[:, 0]), np.asarray(heading, float))
-    return np.asarray(pos, float) + new_vel * dt_s, new_vel, head, speed
+class ArenaSpawn:
+    """Set-up hook: the flock placed at random in the arena (own random stream), random headings."""
+
+    def __init__(self, arena, walls, obstacles, rng: np.random.Generator):
+        self.arena, self.walls, self.obstacles, self.rng = arena, walls, obstacles, rng
+
+    def setup(self, sim) -> None:
+        a = self.arena
+        start = random_positions(self.rng, a.n_agents, self.walls, self.obstacles, min_spacing_m=a.min_spacing_m,
+                                 margin_m=a.margin_m)
+        heading0 = self.rng.uniform(-np.pi, np.pi, a.n_agents)
+        sim.add_free_vehicles(a.ids, start, heading0, a.initial_speed_mps, a.length_m, a.width_m)

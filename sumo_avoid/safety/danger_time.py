@@ -89,10 +89,18 @@ def levels(td: np.ndarray, v_close: np.ndarray, p: DangerTimeParams, gap=None) -
 
 
 class DangerTimeLayer:
-    """Limits the desired velocities of the egos by their radar danger time; counts interventions."""
+    """Limits the desired velocities of the egos by their radar danger time; counts interventions.
 
-    def __init__(self, params: DangerTimeParams):
+    As a :class:`~sumo_avoid.core.interfaces.Layer` it reads the front radar scan of the step
+    (``Observation.scans[0]``); with ``enforce=False`` it only counts (a monitor: the command passes
+    unchanged)."""
+
+    needs_scans = True
+
+    def __init__(self, params: DangerTimeParams, ctx=None, *, enforce: bool = True):
         self.p = params
+        self.dt = ctx.step_s if ctx is not None else None
+        self.enforce = enforce
         self.level: dict[str, int] = {}
         self.counts = {"radar_warnings": 0, "radar_reductions": 0, "radar_brakes": 0}
         self.min_td = math.inf
@@ -119,6 +127,17 @@ class DangerTimeLayer:
         cap = np.where(lvl == BRAKE, 0.0, cap)
         scale = np.where(s_des > cap, cap / np.maximum(s_des, 1e-12), 1.0)
         return v_des * scale[:, None], lvl
+
+    def add_ego(self, task) -> None:
+        pass
+
+    def remove_ego(self, vid: str) -> None:
+        pass
+
+    def filter(self, obs, command: np.ndarray) -> np.ndarray:
+        snap = obs.snapshot
+        limited, _ = self.apply(command, obs.scans[0], snap.width[obs.ego_rows], obs.ego_speed, self.dt)
+        return limited if self.enforce else command
 
     def stats(self) -> dict:
         return {**self.counts, "min_danger_time_s": self.min_td if math.isfinite(self.min_td) else None}

@@ -12,7 +12,17 @@ import pathlib
 import sys
 from dataclasses import dataclass, field, replace
 
+import numpy as np
+
 from sumo_avoid.core.config import ScenarioError, build, describe, field_doc
+
+from sumo_avoid.actuation import ACTUATORS
+from sumo_avoid.actuation.params import ActuatorConfig
+from sumo_avoid.control import CONTROLLERS
+from sumo_avoid.metrics import METRICS
+from sumo_avoid.safety import LAYERS
+from sumo_avoid.sensing import SENSORS
+from sumo_avoid.sumo.road import Road
 from sumo_avoid.safety.danger_time import DangerTimeParams
 from sumo_avoid.sensing.radar import RadarParams
 
@@ -60,31 +70,6 @@ class EgoConfig:
 
 
 @dataclass(frozen=True)
-class ActuatorConfig:
-    max_accel_mps2: float = field_doc(3.0, doc="largest longitudinal acceleration, m/s^2")
-    max_decel_mps2: float = field_doc(8.0, doc="largest braking deceleration, m/s^2")
-    max_lat_accel_mps2: float = field_doc(4.0, doc="largest lateral acceleration v*yaw_rate, m/s^2")
-    max_yaw_rate_radps: float = field_doc(0.8, doc="largest yaw rate, rad/s")
-    min_turn_radius_m: float = field_doc(5.5, doc="smallest turning radius (yaw rate <= v/R), m")
-    max_reverse_speed_mps: float = field_doc(2.0, doc="reverse gear speed limit, m/s (0 = no reversing)")
-    mode: str = field_doc("kinematic", doc="'kinematic' (car: accel/yaw limits) or 'relaxation' (flocking "
-                                           "reference: dv/dt = (v_des - v)/tau, |dv/dt| <= relax_max_accel)")
-    tau_s: float = field_doc(1.0, doc="relaxation mode: velocity time constant tau, s")
-    relax_max_accel_mps2: float = field_doc(6.0, doc="relaxation mode: acceleration cap, m/s^2")
-    outer_noise_m2ps3: float = field_doc(0.0, doc="relaxation mode: reference simulator's 'outer' noise on the "
-                                                  "actual motion, sigma in m^2/s^3 (robotsim: 0.2; 0 = off; "
-                                                  "sumo_avoid/noise.py)")
-
-    def __post_init__(self):
-        if self.mode not in ("kinematic", "relaxation"):
-            raise ValueError("actuator.mode must be 'kinematic' or 'relaxation'")
-        if self.tau_s <= 0:
-            raise ValueError("actuator.tau_s > 0")
-        if self.outer_noise_m2ps3 < 0:
-            raise ValueError("actuator.outer_noise_m2ps3 >= 0")
-
-
-@dataclass(frozen=True)
 class ArenaConfig:
     size_m: float = field_doc(250.0, doc="side of the square arena (virtual walls), m")
     origin: tuple[float, ...] = field_doc((0.0, 0.0), signed=True, doc="lower-left corner [x, y] of the arena, m")
@@ -116,11 +101,18 @@ class ObstacleConfig:
         if len(self.shape) < 3 or any(len(p) != 2 for p in self.shape):
             raise ValueError(f"obstacle {self.id}: shape needs >= 3 points [x, y]")
 
+    @property
+    def polygon(self) -> np.ndarray:
+        """(k, 2) vertices, m."""
+        return np.asarray(self.shape, float)
+
 
 @dataclass(frozen=True)
 class OutputConfig:
     record_radius_m: float = field_doc(300.0, doc="record non-ego vehicles within this distance of an ego, m (0 = all)")
     plots: bool = field_doc(True, doc="write trajectory.png and timeseries.png")
+    metrics: tuple[str, ...] = field_doc((), doc="metrics to compute (`sumo-avoid metrics`); empty = the standard set "
+                                                 "plus the controller's own (flocking: order parameters and fitness)")
 
 
 @dataclass(frozen=True)
@@ -207,8 +199,6 @@ def read_toml(path: pathlib.Path) -> dict:
 
 def load(path, overrides: list[str] = (), controller: str | None = None, seed: int | None = None) -> Scenario:
     """Read, override and validate a scenario file. Raises :class:`ScenarioError`."""
-    from sumo_avoid.control import REGISTRY  # late import: controllers import nothing from here
-
     path = pathlib.Path(path)
     file = str(path)
     data = apply_overrides(read_toml(path), list(overrides), file)
@@ -217,18 +207,19 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     if seed is not None:
         data.setdefault("sim", {})["seed"] = seed
     spec = build(ScenarioSpec, data, file)
-    if spec.ego.controller not in REGISTRY:
-        raise ScenarioError(file, "ego.controller", f"one of {sorted(REGISTRY)}", spec.ego.controller)
-    if spec.ego.sensor not in ("truth", "radar"):
-        raise ScenarioError(file, "ego.sensor", "one of ['radar', 'truth']", spec.ego.sensor)
-    if spec.ego.safety not in ("none", "danger_time"):
-        raise ScenarioError(file, "ego.safety", "one of ['danger_time', 'none']", spec.ego.safety)
+    for key, value, names in (("ego.controller", spec.ego.controller, CONTROLLERS.names()),
+                              ("ego.sensor", spec.ego.sensor, SENSORS.names()),
+                              ("ego.safety", spec.ego.safety, ["none", *LAYERS.names()]),
+                              ("actuator.mode", spec.actuator.mode, ACTUATORS.names()),
+                              *((f"output.metrics[{i}]", m, METRICS.names()) for i, m in enumerate(spec.output.metrics))):
+        if value not in names:
+            raise ScenarioError(file, key, f"one of {sorted(names)}", value)
     params = {}
-    for name, (_, params_cls) in REGISTRY.items():
-        params[name] = build(params_cls, spec.controllers.get(name, {}), file, f"controllers.{name}")
+    for entry in CONTROLLERS.entries():
+        params[entry.name] = build(entry.params, spec.controllers.get(entry.name, {}), file, f"controllers.{entry.name}")
     for name in spec.controllers:
-        if name not in REGISTRY:
-            raise ScenarioError(file, f"controllers.{name}", f"a controller name, one of {sorted(REGISTRY)}", name)
+        if name not in CONTROLLERS:
+            raise ScenarioError(file, f"controllers.{name}", f"a controller name, one of {CONTROLLERS.names()}", name)
 
     base = path.resolve().parent
 
@@ -242,8 +233,6 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     routes = tuple(existing(r, f"sim.routes[{i}]", "SUMO route") for i, r in enumerate(spec.sim.routes))
     adds = tuple(existing(r, f"sim.additional[{i}]", "SUMO additional") for i, r in enumerate(spec.sim.additional))
     if spec.ego.goal is not None:
-        from sumo_avoid.sumo.road import Road
-
         try:
             road = Road.from_net_file(net)
         except Exception as e:  # sumolib raises many kinds
@@ -261,8 +250,6 @@ def with_spec(scn: Scenario, **changes) -> Scenario:
 
 def format_reference() -> str:
     """Markdown table of every scenario key (for docs/scenario_format.md)."""
-    from sumo_avoid.control import REGISTRY
-
     lines = ["# Scenario file format", "",
              "Generated by `sumo-avoid keys` from the config dataclasses (tests/test_docs.py keeps it in sync).",
              "A scenario is a TOML file; paths are relative to it. Top-level keys, then one table per",
@@ -274,8 +261,8 @@ def format_reference() -> str:
         if key == "controllers":
             continue
         lines.append(f"| `{key}` | {tp} | `{default}` | {doc} |")
-    for name, (_, params_cls) in sorted(REGISTRY.items()):
-        for key, tp, default, doc in describe(params_cls, f"controllers.{name}"):
+    for entry in CONTROLLERS.entries():
+        for key, tp, default, doc in describe(entry.params, f"controllers.{entry.name}"):
             lines.append(f"| `{key}` | {tp} | `{default}` | {doc} |")
     return "\n".join(lines)
 

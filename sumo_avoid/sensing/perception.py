@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from sumo_avoid.core.geometry import footprint_corners, near_any
+
 ASSUMED_LENGTH_M = 4.5
 ASSUMED_WIDTH_M = 1.8
 
@@ -71,12 +73,10 @@ def obstacle_vehicles(obs, row: int, q, radius_m: float):
     from the radar when ``obs.detections`` is set (moving along ``obs.route_heading`` of that ego
     if given, see :func:`perceived_boxes`), else ground truth within ``radius_m`` of q."""
     snap = obs.snapshot
-    scans = getattr(obs, "detections", None)
-    if scans is not None:  # one scan, or one per radar mount (front, rear)
-        route = getattr(obs, "route_heading", None)
-        along = None if route is None else float(route[obs.ego_ids.index(snap.ids[row])])
-        parts = [perceived_obstacles(d, snap.ids[row], along=along)
-                 for d in (scans if isinstance(scans, tuple) else (scans,))]
+    if obs.detections is not None:  # one scan per radar mount (front, rear)
+        route = obs.route_heading
+        along = None if route is None else float(route[obs.index(snap.ids[row])])
+        parts = [perceived_obstacles(d, snap.ids[row], along=along) for d in obs.detections]
         return tuple(np.concatenate(x) for x in zip(*parts)) if len(parts) > 1 else parts[0]
     d = np.hypot(*(snap.pos - np.asarray(q, float)).T)
     o = np.flatnonzero((d < radius_m) & (np.arange(snap.n) != row))
@@ -88,9 +88,7 @@ def radar_obstacles(obs, known_pos, gate_m: float):
     within ``gate_m`` of a ``known_pos`` (vehicles known otherwise, e.g. flock members over V2V;
     no target ids used). Returns (corners (B,4,2), velocities (B,2), owner (B,) index into
     ``obs.ego_ids``)."""
-    from sumo_avoid.core.geometry import footprint_corners, near_any
-
-    scans = obs.detections if isinstance(obs.detections, tuple) else (obs.detections,)
+    scans = obs.detections
     row_of = {v: k for k, v in enumerate(obs.ego_ids)}
     parts = [(perceived_boxes(d), np.array([row_of[d.ego_ids[e]] for e in d.ego], dtype=int)) for d in scans]
     pos, hd, ln, wd, vel = (np.concatenate([b[i] for b, _ in parts]) for i in range(5))

@@ -41,12 +41,15 @@ k-d tree formulation they replaced (kept as the reference in tests/radar_referen
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from sumo_avoid.core.config import field_doc
-from sumo_avoid.core.geometry import footprint_corners
+from sumo_avoid.core.geometry import footprint_corners, wrap_angle
+from sumo_avoid.core.types import Detections
+from sumo_avoid.sensing import occlusion
+from sumo_avoid.sensing.tracker import Tracker
 
 _BIG = 1e18
 
@@ -81,47 +84,11 @@ class RadarParams:
             raise ValueError("0 <= radar.detection_prob <= 1")
 
 
-@dataclass(frozen=True)
-class Detections:
-    """One scan of all egos' radars: D detections, each row belongs to ego ``ego[i]``."""
-
-    time_s: float
-    ego_ids: tuple[str, ...]  # the egos scanned (index space of ``ego``)
-    sensor_pos: np.ndarray  # (E, 2) radar positions (front bumper centres), m
-    sensor_heading: np.ndarray  # (E,) boresight, rad CCW from +x
-    sensor_vel: np.ndarray  # (E, 2) ego velocities, m/s
-    ego: np.ndarray  # (D,) int index into ego_ids
-    range_m: np.ndarray  # (D,)
-    azimuth_rad: np.ndarray  # (D,) CCW from the boresight
-    radial_speed_mps: np.ndarray  # (D,) relative speed along the line of sight (< 0 closing)
-    target: tuple[str, ...] = field(default=())  # (D,) true target id, "" = false alarm. EVALUATION ONLY
-    mount: str = "front"  # which radar: "front" (boresight = heading) or "rear" (boresight = heading + pi)
-
-    @property
-    def n(self) -> int:
-        return len(self.range_m)
-
-    def points(self) -> np.ndarray:
-        """(D, 2) world positions of the detections, m."""
-        a = self.sensor_heading[self.ego] + self.azimuth_rad
-        return self.sensor_pos[self.ego] + self.range_m[:, None] * np.column_stack([np.cos(a), np.sin(a)])
-
-    def of(self, vid: str) -> np.ndarray:
-        """Indices of the detections of ego ``vid``."""
-        return np.flatnonzero(self.ego == self.ego_ids.index(vid)) if vid in self.ego_ids else np.zeros(0, int)
-
-
-def _wrap(a):
-    return (a + np.pi) % (2 * np.pi) - np.pi
-
-
 def targets(snap, obstacles=()):
     """Everything a radar can see: vehicles' footprints (4 corners) and static polygons, padded to
     K vertices by repeating the last one. Returns polys (N, K, 2), velocities (N, 2), ids (N,),
     centres (N, 2) (vertex means) and circumscribed radii (N,)."""
-    from sumo_avoid.sensing.occlusion import boxes
-
-    corners, centre, radius = boxes(snap.pos, np.cos(snap.heading), np.sin(snap.heading), snap.length, snap.width)
+    corners, centre, radius = occlusion.boxes(snap.pos, np.cos(snap.heading), np.sin(snap.heading), snap.length, snap.width)
     ids = tuple(snap.ids)
     if not len(obstacles):
         return corners, snap.vel, ids, centre, radius
@@ -150,9 +117,6 @@ class Radar:
         self.rng = rng
         self._last: Detections | None = None
         self.log: list[Detections] = []
-        from sumo_avoid.sensing import occlusion  # numba: imported here, not with this module (runs without radar skip it)
-        from sumo_avoid.sensing.tracker import Tracker  # late: tracker imports Detections from here
-
         occlusion.warm()  # load the compiled kernel now, with the set-up, not inside the first step
         self._scan, self._candidates = occlusion.scan, occlusion.candidates
         self.tracker = Tracker(params.memory_s, params.fov_deg, params.max_range_m) if params.memory_s > 0 else None
@@ -179,7 +143,7 @@ class Radar:
     # --- the physics -----------------------------------------------------------------------
     def pose(self, snap, rows):
         """Sensor positions (E, 2) (bumper centres), boresights (E,) rad and their unit vectors (E, 2)."""
-        hd = snap.heading[rows] if self.mount == "front" else _wrap(snap.heading[rows] + np.pi)  # rear looks back
+        hd = snap.heading[rows] if self.mount == "front" else wrap_angle(snap.heading[rows] + np.pi)  # rear looks back
         fwd = np.column_stack([np.cos(hd), np.sin(hd)])
         return snap.pos[rows] + 0.5 * snap.length[rows][:, None] * fwd, hd, fwd
 

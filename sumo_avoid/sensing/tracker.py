@@ -18,7 +18,8 @@ import math
 import numpy as np
 
 from sumo_avoid.sensing.perception import velocity_estimate
-from sumo_avoid.sensing.radar import Detections
+from sumo_avoid.core.types import Detections
+from scipy.spatial import cKDTree
 
 
 _EGO_SEPARATION_M = 1e6  # egos' returns are kept apart in the search tree along a third axis
@@ -27,8 +28,6 @@ _EGO_SEPARATION_M = 1e6  # egos' returns are kept apart in the search tree along
 def _near_same_ego(p, e, q, f, gate_m: float) -> np.ndarray:
     """(len(p),) True where point p[i] of ego e[i] has a point q[j] of the same ego (f[j] == e[i])
     within gate_m: one k-d tree over (x, y, ego * 1e6), so other egos' points are never near."""
-    from scipy.spatial import cKDTree
-
     tree = cKDTree(np.column_stack([q, f * _EGO_SEPARATION_M]))
     d, _ = tree.query(np.column_stack([p, e * _EGO_SEPARATION_M]), k=1, distance_upper_bound=gate_m)
     return d <= gate_m

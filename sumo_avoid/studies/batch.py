@@ -25,6 +25,9 @@ from sumo_avoid.studies import ledger as ledger_mod
 from sumo_avoid.studies import worker
 from sumo_avoid.core.config import ScenarioError, check_table
 from sumo_avoid.studies.worker import CRASHES, kill_all, run_one
+from sumo_avoid.scenario import spec as scenario
+from sumo_avoid.scenario.spec import read_toml
+from tqdm import tqdm
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -103,8 +106,6 @@ def _file_digest(path: pathlib.Path) -> bytes:
 def plan(scenario_path, seed: int, overrides=(), controller=None, inject_crash=None) -> RunSpec:
     """Validate one run (raises ScenarioError) and compute its key: sha256 of the scenario file,
     the net/route/additional files it references, the overrides, controller, seed (and crash)."""
-    from sumo_avoid.scenario import spec as scenario
-
     path = pathlib.Path(scenario_path).resolve()
     scn = scenario.load(path, list(overrides), controller=controller, seed=seed)
     if inject_crash is not None and inject_crash not in CRASHES:
@@ -151,8 +152,6 @@ def load_batch_file(path) -> tuple[list[RunSpec], dict]:
     to the batch file. Returns (runs, options)."""
     path = pathlib.Path(path)
     file = str(path)
-    from sumo_avoid.scenario.spec import read_toml
-
     data = read_toml(path)
     allowed_top = {"workers", "ledger", "timeout_s", "runs"}
     allowed_run = {"scenario", "seeds", "set", "controllers", "grid", "inject_crash"}
@@ -224,8 +223,6 @@ class _Progress:
         self.done = self.failed = 0
         self.bar = None
         if enabled and total:
-            from tqdm import tqdm
-
             size = shutil.get_terminal_size((100, 20))  # never 0 (a bare pty reports 0x0: tqdm would hide)
             self.bar = tqdm(total=total, unit="run", ncols=min(size.columns, 120), nrows=size.lines, file=sys.stderr)
 
@@ -326,8 +323,6 @@ def add_parser(sub) -> None:
 
 
 def _is_batch_file(path: pathlib.Path) -> bool:
-    from sumo_avoid.scenario.spec import read_toml
-
     return "runs" in read_toml(path)
 
 

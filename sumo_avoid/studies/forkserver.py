@@ -1,4 +1,4 @@
-"""The fork server's own side (``python -m sumo_avoid.studies.worker --serve PARENT_PID``).
+"""The fork server's own side (``python -m sumo_avoid.studies.forkserver PARENT_PID``).
 
 It imports what every run needs once, then forks one fresh child per job line on stdin, enforces
 each run's timeout (pidfd, race-free kill) and replies one JSON line per finished child on stdout.
@@ -16,24 +16,14 @@ import sys
 import time
 import traceback
 
+from sumo_avoid.sensing import occlusion
 from sumo_avoid.studies.worker import _exit_now, child
 
 
 def _preload(plots: bool) -> None:
-    """What every run imports (so the children get it for free), and the plotting stack on demand."""
-    from sumo_avoid.rollout import arena, runner  # noqa: F401
-    from sumo_avoid import outputs as evaluate, order
-    from sumo_avoid.scenario import spec as scenario
-    from sumo_avoid.sensing import occlusion
-
-    occlusion.warm()  # the radar's compiled kernel (numba; from its on-disk cache after the first time)
-    if plots:
-        import matplotlib.backends.backend_agg  # noqa: F401
-        import matplotlib.figure  # noqa: F401
-        import matplotlib.lines  # noqa: F401
-        import matplotlib.patches  # noqa: F401
-
-        from sumo_avoid.plots import trajectories as plotting  # noqa: F401
+    """What every run needs is imported with this module (worker -> outputs, runner, plots); the
+    radar's compiled kernel is loaded here (numba; from its on-disk cache after the first time)."""
+    occlusion.warm()
 
 
 def serve(parent: int) -> int:
@@ -126,3 +116,7 @@ def _forked_child(job: dict, inherited_fds: list[int]) -> None:
         traceback.print_exc()
     finally:
         _exit_now(rc)
+
+
+if __name__ == "__main__":
+    os._exit(serve(int(sys.argv[1])))  # nothing to flush (replies are os.write): skip the 0.25 s teardown

@@ -17,6 +17,8 @@ import json
 import pathlib
 import re
 import sqlite3
+from importlib import metadata
+import pandas as pd
 
 FIXED = {  # column -> SQL type; metric columns are added after these
     "key": "TEXT PRIMARY KEY",
@@ -80,8 +82,6 @@ def code_version() -> str:
     """16 hex digits naming the plug-in's code: sha256 of every ``sumo_avoid/**/*.py`` (path and
     bytes) and SUMO's version. A run key covers a run's inputs, not the code; this column tells
     rows made by different code apart."""
-    from importlib import metadata
-
     root = pathlib.Path(__file__).resolve().parent
     h = hashlib.sha256()
     for f in sorted(root.rglob("*.py")):
@@ -137,8 +137,6 @@ def _transaction(con: sqlite3.Connection):
 
 def read(path):
     """The whole ``runs`` table, ordered by scenario, controller, seed, key."""
-    import pandas as pd
-
     path = pathlib.Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such ledger")

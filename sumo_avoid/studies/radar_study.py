@@ -34,7 +34,7 @@ def study(path, seed_list, overrides=()) -> pd.DataFrame:
         row = {"seed": seed}
         for sensor in ("truth", "radar"):
             scn = scenario.load(path, [*overrides, f'ego.sensor="{sensor}"'], seed=seed)
-            m = evaluate.compute(runner.run(scn))
+            m = evaluate.run_metrics(runner.run(scn))
             row.update({f"{sensor}_{k}": m.get(k) for k in KEYS if sensor == "radar" or not k.startswith("radar")
                         and k != "min_danger_time_s"})
         rows.append(row)

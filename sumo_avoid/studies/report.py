@@ -18,6 +18,14 @@ import io
 import json
 import pathlib
 import types
+import pandas as pd
+from sumo_avoid.studies import ledger
+from sumo_avoid.plots.trajectories import _new_figure
+from sumo_avoid.plots.trajectories import plot_trajectories
+from sumo_avoid.sumo.road import Road
+from sumo_avoid.metrics.series import series
+from sumo_avoid.plots.trajectories import plot_timeseries
+import sys
 
 METRICS = ("collisions", "min_gap_m", "phi_coll", "phi_wall", "mean_speed_mps", "time_to_goal_s",
            "path_length_m", "sumo_collisions")
@@ -25,10 +33,6 @@ METRICS = ("collisions", "min_gap_m", "phi_coll", "phi_wall", "mean_speed_mps", 
 
 def load_runs(src) -> tuple:
     """(runs DataFrame, base folder for the ``artifacts`` column)."""
-    import pandas as pd
-
-    from sumo_avoid.studies import ledger
-
     src = pathlib.Path(src)
     if src.is_dir() and (src / "ledger.sqlite").is_file():
         src = src / "ledger.sqlite"
@@ -51,8 +55,6 @@ def load_runs(src) -> tuple:
 
 def summary(df):
     """Controller x scenario table: runs, failures and aggregate metrics over done runs."""
-    import pandas as pd
-
     rows = []
     for (scn, ctl), g in df.groupby(["scenario", "controller"], sort=True, dropna=False):
         d = g[g["status"] == "done"]
@@ -85,8 +87,6 @@ def _img(b64: str, alt: str) -> str:
 
 def box_plots(df) -> str | None:
     """One panel per metric: a box per scenario/controller over its done runs' seeds."""
-    from sumo_avoid.plots.trajectories import _new_figure
-
     d = df[df["status"] == "done"]
     cols = [c for c in METRICS if c in d and d[c].notna().any()]
     if not cols or d.empty:
@@ -129,11 +129,6 @@ def trajectory_png(row, base: pathlib.Path) -> str | None:
     net = row.get("net_file")
     if not (d / "trajectories.csv").is_file() or not isinstance(net, str) or not pathlib.Path(net).is_file():
         return None
-    import pandas as pd
-
-    from sumo_avoid.plots.trajectories import plot_trajectories
-    from sumo_avoid.sumo.road import Road
-
     out = d / "trajectory.png"
     plot_trajectories(Road.from_net_file(net), pd.read_csv(d / "trajectories.csv"), out,
                       title=f"{row['scenario']} · {row['controller']} · seed {row['seed']}")
@@ -149,11 +144,6 @@ def timeseries_png(row, base: pathlib.Path) -> str | None:
         return _png_file(d / "timeseries.png")
     if not (d / "trajectories.csv").is_file():
         return None
-    import pandas as pd
-
-    from sumo_avoid.outputs import series
-    from sumo_avoid.plots.trajectories import plot_timeseries
-
     out = d / "timeseries.png"
     plot_timeseries(series(types.SimpleNamespace(traj=pd.read_csv(d / "trajectories.csv"))), out,
                     title=f"{row['scenario']} · {row['controller']} · seed {row['seed']}")
@@ -235,8 +225,6 @@ def add_parser(sub) -> None:
 
 
 def cmd_report(args) -> int:
-    import sys
-
     try:
         df, base = load_runs(args.source)
     except FileNotFoundError as e:

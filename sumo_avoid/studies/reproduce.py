@@ -19,6 +19,13 @@ import time
 
 import numpy as np
 
+from sumo_avoid.metrics import basic
+from sumo_avoid.metrics.flocking import FlockingOrder
+from sumo_avoid.plots.arena import plot_arena
+from sumo_avoid.rollout import runner
+from sumo_avoid.scenario import spec as scenario
+import pandas as pd
+
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 SPEEDS = (4, 6, 8)
 # SPEC §1.3, mean and sd over the seed's 100 evaluations; phi_coll in metrics.json units (not x1e-6)
@@ -36,19 +43,13 @@ EXTRA = ("phi_corr", "n_disc", "n_min", "phi_wall", "mu_disc", "mu_cluster", "mu
 
 
 def _job(job: dict) -> dict:
-    from sumo_avoid import outputs as evaluate
-    from sumo_avoid.metrics import basic as metrics
-    from sumo_avoid.rollout import runner
-    from sumo_avoid.scenario import spec as scenario
-
     sets = [f"arena.n_agents={job['agents']}", f"sim.duration_s={job['duration']}", *job["sets"]]
     scn = scenario.load(ROOT / "scenarios" / f"arena_v{job['v']}.toml", sets, seed=job["seed"])
     t0 = time.perf_counter()
     res = runner.run(scn)
-    # the flocking part of evaluate.compute (same functions; min_gap and SUMO bookkeeping left out)
-    phi_coll = metrics.phi_coll(res.traj, scn.spec.sim.step_s)
-    m = evaluate.flocking_compute(res, phi_coll, 0.0)
-    m["collisions"] = int(len(metrics.collision_events(res.traj)))
+    # the flocking metric (min_gap and SUMO bookkeeping left out)
+    m = FlockingOrder().compute(res)
+    m["collisions"] = int(len(basic.collision_events(res.traj)))
     m["wall_s"] = time.perf_counter() - t0
     if job.get("figure"):
         plot_arena(res, pathlib.Path(job["figure"]), f"v_flock = {job['v']} m/s · seed {job['seed']} · "
@@ -56,33 +57,6 @@ def _job(job: dict) -> dict:
     keep = {k: m.get(k) for k in (*PAPER, *EXTRA) if k in m}
     keep.update(v=job["v"], seed=job["seed"], wall_s=m["wall_s"])
     return keep
-
-
-def plot_arena(res, out_png: pathlib.Path, title: str = "") -> None:
-    """Trajectories of every ego in the arena (like the seed's Fig. 7), walls and obstacles drawn."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 7))
-    if res.walls is not None:
-        w = np.vstack([res.walls, res.walls[:1]])
-        ax.plot(w[:, 0], w[:, 1], "k-", lw=2)
-    for ob in res.obstacles:
-        ax.fill(ob[:, 0], ob[:, 1], color="0.35")
-    t = res.traj[res.traj["is_ego"]].sort_values(["id", "step"])
-    for _, g in t.groupby("id", sort=True):  # one line per vehicle (plotting only)
-        ax.plot(g["x"], g["y"], lw=0.4, alpha=0.6)
-    last = t[t["step"] == t["step"].max()]
-    ax.plot(last["x"], last["y"], "k.", ms=3)
-    ax.set_aspect("equal")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.set_title(title, fontsize=9)
-    out_png.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out_png, dpi=110, bbox_inches="tight")
-    plt.close(fig)
 
 
 def summarise(runs: list[dict]) -> list[dict]:
@@ -111,8 +85,6 @@ def _fmt(x, metric):
 
 
 def write_table(rows: list[dict], runs: list[dict], out: pathlib.Path, command: str, settings: str) -> None:
-    import pandas as pd
-
     pd.DataFrame(rows, columns=["v_flock", "metric", "ours_mean", "ours_sd", "paper_mean", "paper_sd"]).to_csv(
         out / "table4.csv", index=False)
     lines = ["# Table 4 (seed 000) reproduced in SUMO", "", f"Command: `{command}`", "", settings, "",

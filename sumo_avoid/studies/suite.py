@@ -23,6 +23,10 @@ import tempfile
 import xml.etree.ElementTree as ET
 
 from sumo_avoid.core.config import ScenarioError, check_table
+from sumo_avoid.studies.batch import parse_seeds
+from sumo_avoid.scenario.spec import read_toml
+import os
+from sumo_avoid.studies import batch, ledger
 
 OPS = {"==": operator.eq, "!=": operator.ne, "<=": operator.le, ">=": operator.ge, "<": operator.lt, ">": operator.gt}
 AGGREGATES = ("rate", "mean", "min", "max")
@@ -97,9 +101,6 @@ class Entry:
 
 def load(path, seeds_override=None, extra_sets=()) -> list[Entry]:
     """Read and validate a suite file (raises ScenarioError)."""
-    from sumo_avoid.studies.batch import parse_seeds
-    from sumo_avoid.scenario.spec import read_toml
-
     path = pathlib.Path(path)
     file = str(path)
     data = read_toml(path)
@@ -218,10 +219,6 @@ def add_parser(sub) -> None:
 
 
 def cmd_suite(args) -> int:
-    import os
-
-    from sumo_avoid.studies import batch, ledger
-
     entries = load(args.suite, args.seeds, args.overrides)
     if args.workers is not None and args.workers < 1:
         raise ScenarioError("<command line>", "--workers", "a positive integer", args.workers)

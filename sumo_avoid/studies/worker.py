@@ -4,7 +4,7 @@ Every run is its own process, so a run that segfaults, aborts or hangs costs onl
 ways to start that process (``start``):
 
 * ``"fork"`` (default on Linux): one warm **fork server** per parent process
-  (``python -m sumo_avoid.studies.worker --serve``; its loop is :mod:`sumo_avoid.studies.forkserver`) imports numpy, pandas, shapely, libsumo and the
+  (``python -m sumo_avoid.studies.forkserver PARENT_PID``) imports numpy, pandas, shapely, libsumo and the
   plug-in once, then forks a fresh child per run. The server never runs a simulation itself, so
   every child starts from the same clean, freshly imported state; a child that crashes takes
   nothing with it. The server enforces the run's timeout (``pidfd``, race-free kill) and reports
@@ -40,6 +40,10 @@ import sys
 import threading
 import time
 import uuid
+
+from sumo_avoid import outputs as evaluate
+from sumo_avoid.rollout import runner
+from sumo_avoid.scenario import spec as scenario
 
 CRASHES = ("segfault", "abort")
 STARTS = ("fork", "spawn")
@@ -180,7 +184,7 @@ class _Server:
     (one JSON line per finished run, matched by job id) to the waiting ``run_one`` calls."""
 
     def __init__(self):
-        self.proc = subprocess.Popen([sys.executable, "-m", "sumo_avoid.studies.worker", "--serve", str(os.getpid())],
+        self.proc = subprocess.Popen([sys.executable, "-m", "sumo_avoid.studies.forkserver", str(os.getpid())],
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=_child_env())
         self.lock = threading.Lock()
         self.waiting: dict[str, list] = {}  # job id -> [Event, reply or None]
@@ -355,10 +359,6 @@ def child(job: dict) -> int:
         os.replace(part, out / "result.json")
 
     try:
-        from sumo_avoid import outputs as evaluate
-        from sumo_avoid.rollout import runner
-        from sumo_avoid.scenario import spec as scenario
-
         marks["imported_wall"] = time.time()
         scn = scenario.load(job["scenario"], job["overrides"], controller=job["controller"], seed=job["seed"])
         marks["loaded_wall"] = time.time()
@@ -379,8 +379,4 @@ def child(job: dict) -> int:
 
 
 if __name__ == "__main__":
-    if sys.argv[1] == "--serve":
-        from sumo_avoid.studies.forkserver import serve
-
-        os._exit(serve(int(sys.argv[2])))  # nothing to flush (replies are os.write): skip the 0.25 s teardown
     _exit_now(child(json.loads(sys.argv[1])))

@@ -22,55 +22,8 @@ import numpy as np
 import shapely
 from shapely.geometry import LineString, MultiPolygon, Polygon
 
-__all__ = [
-    "Road",
-    "polyline_length",
-    "polyline_point_at",
-    "polyline_project",
-]
-
-
-# --------------------------------------------------------------------------- polyline helpers
-def _as_path(path) -> np.ndarray:
-    p = np.asarray(path, dtype=float).reshape(-1, 2)
-    if len(p) == 0:
-        raise ValueError("empty polyline")
-    return p
-
-
-def _cumlen(p: np.ndarray) -> np.ndarray:
-    seg = np.hypot(*np.diff(p, axis=0).T) if len(p) > 1 else np.zeros(0)
-    return np.concatenate([[0.0], np.cumsum(seg)])
-
-
-def polyline_length(path) -> float:
-    """Total arc length of a (P,2) polyline, m."""
-    return float(_cumlen(_as_path(path))[-1])
-
-
-def polyline_point_at(path, s_m: float) -> np.ndarray:
-    """Point at arc length ``s_m`` along the polyline (clamped to [0, length]) -> (2,)."""
-    p = _as_path(path)
-    cum = _cumlen(p)
-    s = float(np.clip(s_m, 0.0, cum[-1]))
-    return np.array([np.interp(s, cum, p[:, 0]), np.interp(s, cum, p[:, 1])])
-
-
-def polyline_project(path, point) -> float:
-    """Arc length of the point of the polyline nearest to ``point`` (m)."""
-    p = _as_path(path)
-    q = np.asarray(point, dtype=float).reshape(2)
-    if len(p) == 1:
-        return 0.0
-    a, b = p[:-1], p[1:]
-    d = b - a
-    l2 = np.einsum("ij,ij->i", d, d)
-    t = np.where(l2 > 0, np.einsum("ij,ij->i", q - a, d) / np.where(l2 > 0, l2, 1.0), 0.0)
-    t = np.clip(t, 0.0, 1.0)
-    foot = a + t[:, None] * d
-    dist2 = np.einsum("ij,ij->i", foot - q, foot - q)
-    k = int(np.argmin(dist2))
-    return float(_cumlen(p)[k] + t[k] * np.sqrt(l2[k]))
+from sumo_avoid.core.polyline import _as_path, polyline_length, polyline_point_at, polyline_project  # noqa: F401
+import sumolib
 
 
 def _dedupe(points: np.ndarray, tol: float = 1e-6) -> np.ndarray:
@@ -336,7 +289,5 @@ class Road:
 
 @functools.lru_cache(maxsize=16)
 def _load_cached(path: str, mtime_ns: int) -> Road:
-    import sumolib
-
     net = sumolib.net.readNet(path, withInternal=True)
     return Road(net, source=path)
