@@ -111,7 +111,7 @@ class ObstacleConfig:
 class OutputConfig:
     record_radius_m: float = field_doc(300.0, doc="record non-ego vehicles within this distance of an ego, m (0 = all)")
     plots: bool = field_doc(True, doc="write trajectory.png and timeseries.png")
-    metrics: tuple[str, ...] = field_doc((), doc="metrics to compute (`sumo-avoid metrics`); empty = the standard set "
+    metrics: tuple[str, ...] = field_doc((), doc="metrics to compute, by name (run, collisions, min_gap, phi_coll, phi_wall, plugin_stats, motion, flocking); empty = the standard set "
                                                  "plus the controller's own (flocking: order parameters and fitness)")
 
 

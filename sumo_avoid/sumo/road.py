@@ -22,7 +22,7 @@ import numpy as np
 import shapely
 from shapely.geometry import LineString, MultiPolygon, Polygon
 
-from sumo_avoid.core.polyline import _as_path, polyline_length, polyline_point_at, polyline_project  # noqa: F401
+from sumo_avoid.core.polyline import _as_path, _cumlen, polyline_length, polyline_point_at, polyline_project
 import sumolib
 
 
