@@ -23,8 +23,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
 def plain(scn) -> float:
-    from sumo_avoid.arena import random_positions, square
-    from sumo_avoid.sim import SumoSim, sumo_args
+    from sumo_avoid.rollout.arena import random_positions, square
+    from sumo_avoid.sumo.sim import SumoSim, sumo_args
 
     spec, arena = scn.spec, scn.spec.arena
     t0 = time.perf_counter()
@@ -46,7 +46,7 @@ def plain(scn) -> float:
 
 
 def neighbours() -> None:
-    from sumo_avoid.controllers.flocking import neighbour_pairs
+    from sumo_avoid.control.flocking import neighbour_pairs
 
     rng = np.random.default_rng(0)
     print("neighbour pairs within 80 m, density 100 per 250 m square (ms per call):")
@@ -65,8 +65,10 @@ def neighbours() -> None:
 
 
 def main() -> None:
-    from sumo_avoid import evaluate, runner, scenario
-    from sumo_avoid.order import flocking_metrics
+    from sumo_avoid import outputs as evaluate
+    from sumo_avoid.metrics.order import flocking_metrics
+    from sumo_avoid.rollout import runner
+    from sumo_avoid.scenario import spec as scenario
 
     ap = argparse.ArgumentParser()
     ap.add_argument("--agents", type=int, default=100)
@@ -81,7 +83,7 @@ def main() -> None:
     res = runner.run(scn)
     wall = time.perf_counter() - t0
     t1 = time.perf_counter()
-    m = evaluate.compute(res)
+    m = evaluate.run_metrics(res)
     metrics_s = time.perf_counter() - t1
     print(f"arena run: N={a.agents} {a.duration:.0f} s, {res.steps} steps; loop {res.timings['loop_s']:.2f} s; "
           f"metrics {metrics_s:.2f} s; mu {m['mu']:.3f}")

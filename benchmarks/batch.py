@@ -25,7 +25,7 @@ import statistics
 import tempfile
 import time
 
-from sumo_avoid import batch, ledger, worker
+from sumo_avoid.studies import batch, ledger, worker
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 HZ = os.sysconf("SC_CLK_TCK")

@@ -197,7 +197,7 @@ def start_sumo(scn) -> None:
     """Start plain SUMO with the scenario's options, exactly as runner.run does (sim.sumo_args)."""
     import libsumo
 
-    from sumo_avoid.sim import sumo_args
+    from sumo_avoid.sumo.sim import sumo_args
 
     spec = scn.spec
     libsumo.start(sumo_args(scn.net_file, scn.route_files, scn.additional_files, spec.sim.step_s, spec.sim.seed,
@@ -213,7 +213,9 @@ def side(which: str, toml: str, turns: Turns | None, profile: bool = False) -> d
     """Run one side (``plain`` or ``plugin``) of the benchmark in this process; its timings."""
     import libsumo
 
-    from sumo_avoid import evaluate, runner, scenario
+    from sumo_avoid import outputs as evaluate
+    from sumo_avoid.rollout import runner
+    from sumo_avoid.scenario import spec as scenario
 
     scn = scenario.load(pathlib.Path(toml))
     spec = scn.spec

@@ -43,7 +43,7 @@ def side(which: str, toml: str, turns, profile: bool = False) -> dict:
     import libsumo
     import numpy as np
 
-    from sumo_avoid import scenario
+    from sumo_avoid.scenario import spec as scenario
 
     scn = scenario.load(pathlib.Path(toml))
     spec = scn.spec

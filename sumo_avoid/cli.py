@@ -11,8 +11,14 @@ import pathlib
 import shutil
 import sys
 
-from .config import ScenarioError
-from .sim import SumoStartError
+from sumo_avoid import outputs as evaluate
+from sumo_avoid.control import CONTROLLERS
+from sumo_avoid.core.config import ScenarioError
+from sumo_avoid.rollout import runner
+from sumo_avoid.scenario import spec as scenario
+from sumo_avoid.scenario.spec import format_reference
+from sumo_avoid.studies import batch, report, reproduce, suite
+from sumo_avoid.sumo.sim import SumoStartError
 
 EXIT_BAD_INPUT = 2
 
@@ -31,8 +37,6 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     sub.add_parser("controllers", help="list the controllers")
     sub.add_parser("keys", help="print every scenario key (Markdown table)")
-    from . import batch, report, reproduce, suite  # light imports: heavy modules load inside the commands
-
     for mod in (batch, suite, report, reproduce):
         mod.add_parser(sub)
     return ap
@@ -54,8 +58,6 @@ def _summary(m: dict, out: pathlib.Path) -> str:
 
 
 def cmd_run(args) -> int:
-    from . import evaluate, runner, scenario
-
     scn = scenario.load(args.scenario, args.overrides, controller=args.controller, seed=args.seed)
     out = args.out
     if out is None:
@@ -82,14 +84,10 @@ def main(argv=None) -> int:
         if getattr(args, "func", None) is not None:  # batch, suite, report
             return args.func(args)
         if args.command == "controllers":
-            from .controllers import REGISTRY
-
-            for name, (cls, _) in sorted(REGISTRY.items()):
-                print(f"{name:10s} {(cls.__doc__ or '').strip().splitlines()[0] if cls.__doc__ else ''}")
+            for entry in CONTROLLERS.entries():
+                print(f"{entry.name:10s} {entry.doc}")
             return 0
         if args.command == "keys":
-            from .scenario import format_reference
-
             print(format_reference())
             return 0
     except ScenarioError as e:

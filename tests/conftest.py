@@ -13,8 +13,31 @@ def scenario_path():
 
 def run_scenario(name: str, **kw):
     """Run a real scenario in real SUMO (libsumo) and return (RunResult, metrics dict)."""
-    from sumo_avoid import evaluate, runner, scenario
+    from sumo_avoid import outputs as evaluate
+    from sumo_avoid.rollout import runner
+    from sumo_avoid.scenario import spec as scenario
 
     scn = scenario.load(SCENARIOS / f"{name}.toml", kw.pop("overrides", []), **kw)
     res = runner.run(scn)
-    return res, evaluate.compute(res)
+    return res, evaluate.run_metrics(res)
+
+
+_STARTS_SUMO = ("runner.run", "run_scenario", "SumoSim", "main([", "run_batch", "run_suite", "subprocess",
+                "sumo_avoid.cli", "_run(", "radar_study", "benchmarks")
+
+
+def pytest_collection_modifyitems(items):
+    """Mark the tests that start SUMO (``pytest -m "not sumo"`` runs the pure ones in seconds): a test
+    whose own source, or a module-level helper it calls, starts a simulation or a CLI process."""
+    import inspect
+
+    for item in items:
+        fn = getattr(item, "function", None)
+        if fn is None or item.get_closest_marker("sumo"):
+            continue
+        src = inspect.getsource(fn)
+        helpers = [getattr(item.module, n, None) for n in item.module.__dict__ if n.startswith("_") or n.islower()]
+        called = [inspect.getsource(h) for h in helpers
+                  if inspect.isfunction(h) and h.__module__ == item.module.__name__ and f"{h.__name__}(" in src]
+        if any(k in text for text in [src, *called] for k in _STARTS_SUMO) or "scenario_path" in item.fixturenames:
+            item.add_marker("sumo")

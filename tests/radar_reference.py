@@ -11,8 +11,8 @@ import math
 
 import numpy as np
 
-from sumo_avoid.geometry import footprint_corners
-from sumo_avoid.sensors.radar import _wrap
+from sumo_avoid.core.geometry import footprint_corners
+from sumo_avoid.core.geometry import wrap_angle as _wrap
 
 
 def _candidates(spos, fwd, centre, radius, rows, max_range_m: float, half_rad: float):

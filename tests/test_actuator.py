@@ -4,8 +4,8 @@ import math
 import numpy as np
 import pytest
 
-from sumo_avoid.actuator import actuate, wrap_angle
-from sumo_avoid.scenario import ActuatorConfig
+from sumo_avoid.actuation.kinematic import actuate, wrap_angle
+from sumo_avoid.scenario.spec import ActuatorConfig
 
 LIM = ActuatorConfig(max_accel_mps2=2.0, max_decel_mps2=5.0, max_lat_accel_mps2=4.0, max_yaw_rate_radps=0.5,
                      min_turn_radius_m=5.0, max_reverse_speed_mps=2.0)

@@ -9,9 +9,12 @@ import pathlib
 import numpy as np
 import pytest
 
-from sumo_avoid import evaluate, runner, scenario
-from sumo_avoid.arena import outside_distance, random_positions, relax, square
-from sumo_avoid.config import ScenarioError
+from sumo_avoid import outputs as evaluate
+from sumo_avoid.rollout import runner
+from sumo_avoid.scenario import spec as scenario
+from sumo_avoid.actuation.relaxation import relax
+from sumo_avoid.rollout.arena import outside_distance, random_positions, square
+from sumo_avoid.core.config import ScenarioError
 
 SCN = pathlib.Path(__file__).resolve().parents[1] / "scenarios"
 FLOCK_KEYS = ("phi_corr", "phi_coll", "phi_wall", "v_vel", "n_disc", "n_min", "mu_speed", "mu_coll", "mu_disc",
@@ -21,7 +24,7 @@ FLOCK_KEYS = ("phi_corr", "phi_coll", "phi_wall", "v_vel", "n_disc", "n_min", "m
 def _run(name, *sets, seed=3):
     scn = scenario.load(SCN / name, list(sets), seed=seed)
     res = runner.run(scn)
-    return res, evaluate.compute(res)
+    return res, evaluate.run_metrics(res)
 
 
 @pytest.fixture(scope="module")
@@ -68,7 +71,7 @@ def test_arena_runs_in_sumo_with_all_metrics(small_v4):
         assert k in m and m[k] is not None, k
     assert 0.0 <= m["mu"] <= 1.0
     # the flock got going at about v_flock (relaxation from rest, tau = 1 s) and stayed in the square;
-    # the actuation noise (0.28 m/s kicks per step, sumo_avoid.noise) lets single speeds exceed v_flock
+    # the actuation noise (0.28 m/s kicks per step, sumo_avoid.core.noise) lets single speeds exceed v_flock
     late = ego[ego["time_s"] > 20.0]
     assert 3.0 < late["speed"].mean() <= 4.0 + 0.3
     assert ego["x"].between(-2, 252).all() and ego["y"].between(-2, 252).all()
@@ -83,9 +86,9 @@ def test_same_seed_same_metrics(small_v4):
 
 def test_obstacles_are_avoided_and_passed_to_the_run():
     res, m = _run("arena_obstacles.toml", "arena.n_agents=20", "sim.duration_s=60", seed=2)
-    assert len(res.obstacles) == 4
+    assert len(res.scene.obstacles) == 4
     ego = res.traj[res.traj["is_ego"]]
-    d = outside_distance(ego[["x", "y"]].to_numpy(), res.walls, res.obstacles)
+    d = outside_distance(ego[["x", "y"]].to_numpy(), res.scene.walls, res.scene.obstacles)
     assert d.max() < 2.0  # nobody deeper than 2 m into an obstacle or beyond a wall
     assert m["phi_wall"] < 2.0 and m["mu_wall"] > 0.3
 
@@ -110,7 +113,7 @@ def test_highway_flock_keeps_to_the_road_among_traffic():
 
 
 def test_relaxation_step_adds_the_velocity_kick_before_moving():
-    from sumo_avoid.arena import relaxation_step
+    from sumo_avoid.actuation.relaxation import relaxation_step
 
     # v = 2 m/s along x, v_des the same (no relaxation); kick (0, 1) m/s; dt 0.2 s
     pos, vel, head, speed = relaxation_step(np.zeros((1, 2)), np.array([[2.0, 0.0]]), np.zeros(1),

@@ -16,9 +16,9 @@ import time
 
 import pytest
 
-from sumo_avoid import batch, ledger, worker
+from sumo_avoid.studies import batch, ledger, worker
 from sumo_avoid.cli import main
-from sumo_avoid.worker import run_one
+from sumo_avoid.studies.worker import run_one
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 OVERTAKING = ROOT / "scenarios" / "overtaking.toml"
@@ -69,16 +69,17 @@ def _job_parent(arg: str):
 
 def _alive_workers(batch_pid: int) -> list[int]:
     """Worker processes of the batch process ``batch_pid``: its fork server and the runs forked
-    from it (``-m sumo_avoid.worker --serve PID``) or spawned runs (``"parent": PID`` in the job)."""
+    from it (``-m sumo_avoid.studies.forkserver PID``) or spawned runs (``"parent": PID`` in the job)."""
     pids = []
     for p in pathlib.Path("/proc").iterdir():
         try:
             args = (p / "cmdline").read_bytes().decode(errors="replace").split("\0")
         except OSError:
             continue
-        if not p.name.isdigit() or "sumo_avoid.worker" not in args:
+        if not p.name.isdigit():
             continue
-        if args[-3:-1] == ["--serve", str(batch_pid)] or _job_parent(args[-2]) == batch_pid:
+        if ("sumo_avoid.studies.forkserver" in args and args[-2:-1] == [str(batch_pid)]
+                or "sumo_avoid.studies.worker" in args and _job_parent(args[-2]) == batch_pid):
             pids.append(int(p.name))
     return pids
 

@@ -7,18 +7,17 @@ import math
 import numpy as np
 import pytest
 
-from sumo_avoid.arena import relaxation_step, square
-from sumo_avoid.controllers import REGISTRY
-from sumo_avoid.controllers.flocking import (PRESETS, FlockingController, FlockingParams, combine, friction,
-                                             neighbour_pairs, polygon_shills, preset, repulsion, segment_shills,
-                                             shill)
-from sumo_avoid.metrics import braking_curve_D as D
+from sumo_avoid.actuation.relaxation import relaxation_step
+from sumo_avoid.rollout.arena import square
+from sumo_avoid.control import CONTROLLERS
+from sumo_avoid.control.flocking import PRESETS, FlockingController, FlockingParams, combine, friction, neighbour_pairs, polygon_shills, preset, repulsion, segment_shills, shill
+from sumo_avoid.metrics.basic import braking_curve_D as D
 
 P4 = preset("paper_v4")
 
 
 def test_registry_and_presets_hold_table3():
-    assert REGISTRY["flocking"] == (FlockingController, FlockingParams)
+    assert (CONTROLLERS["flocking"].factory, CONTROLLERS["flocking"].params) == (FlockingController, FlockingParams)
     p6, p8 = preset("paper_v6"), preset("paper_v8")
     assert (P4.r0_rep_m, P4.p_rep_ps, P4.r0_frict_m, P4.c_frict, P4.v_frict_mps) == (25.6, 0.13, 85.3, 0.05, 0.63)
     assert (p6.p_frict_ps, p6.a_frict_mps2, p6.r0_shill_m, p6.v_shill_mps) == (5.32, 9.94, 0.5, 19.7)
@@ -106,7 +105,7 @@ def test_speed_rules():
 
 
 def test_desired_is_the_sum_of_the_terms():
-    ctl = FlockingController(FlockingParams(), None, np.random.default_rng(0))
+    ctl = FlockingController(FlockingParams())
     ctl.set_walls(square((0, 0), 250.0))
     rng = np.random.default_rng(3)
     pos = rng.uniform(5, 245, (12, 2))
@@ -131,7 +130,7 @@ def _simulate(ctl, pos, vel, steps, dt=0.2):
 
 
 def test_two_vehicles_repel_below_r0_rep():
-    ctl = FlockingController(preset("paper_v4"), None, np.random.default_rng(0))
+    ctl = FlockingController(preset("paper_v4"))
     pos = np.array([[100.0, 100.0], [105.0, 100.0]])
     vel = np.array([[0.0, 4.0], [0.0, 4.0]])
     pos1, _ = _simulate(ctl, pos, vel, 25)
@@ -139,7 +138,7 @@ def test_two_vehicles_repel_below_r0_rep():
 
 
 def test_two_vehicles_align():
-    ctl = FlockingController(FlockingParams(c_frict=0.3, r0_rep_m=5.0), None, np.random.default_rng(0))
+    ctl = FlockingController(FlockingParams(c_frict=0.3, r0_rep_m=5.0))
     pos = np.array([[0.0, 0.0], [40.0, 0.0]])
     vel = np.array([[4.0, 0.0], [0.0, 4.0]])
     _, vel1 = _simulate(ctl, pos, vel, 100)
@@ -150,7 +149,7 @@ def test_two_vehicles_align():
 
 
 def test_wall_turns_a_vehicle_back():
-    ctl = FlockingController(preset("paper_v4"), None, np.random.default_rng(0))
+    ctl = FlockingController(preset("paper_v4"))
     ctl.set_walls(square((0, 0), 250.0))
     pos = np.array([[200.0, 125.0]])
     vel = 4.0 * np.array([[math.cos(0.5), math.sin(0.5)]])  # towards the east wall, 29 deg off its normal
@@ -167,10 +166,10 @@ def test_wall_turns_a_vehicle_back():
 def test_radar_flock_drops_v2v_members_and_keeps_each_egos_own_returns():
     """sensor = "radar": ego a sees member b (dropped: b is known over V2V) and car c; ego b sees
     nothing ahead. Only a feels c's shill (owner mask), and c's box is where the radar put it."""
-    from sumo_avoid.controllers.base import Observation
-    from sumo_avoid.sensors.perception import radar_obstacles
-    from sumo_avoid.sensors.radar import Radar, RadarParams
-    from sumo_avoid.snapshot import Snapshot
+    from sumo_avoid.core.types import Observation
+    from sumo_avoid.sensing.perception import radar_obstacles
+    from sumo_avoid.sensing.radar import Radar, RadarParams
+    from sumo_avoid.core.snapshot import Snapshot
 
     ids = ("a", "b", "c")
     pos = np.array([[0.0, 0.0], [15.0, 0.0], [30.0, 12.0]])
@@ -179,7 +178,8 @@ def test_radar_flock_drops_v2v_members_and_keeps_each_egos_own_returns():
     det = Radar(RadarParams(range_sigma_m=0, speed_sigma_mps=0, angular_resolution_deg=0, fov_deg=60),
                 np.random.default_rng(0)).scan(snap, ["a", "b"])
     assert sorted(det.target) == ["b", "c"]  # a sees b and c; c is outside b's 60 degree beam
-    corners, v, owner = radar_obstacles(Observation(snap, ("a", "b"), (), (det,)), pos[:2], 4.0)
+    obs = Observation(snap, ("a", "b"), np.array([0, 1]), np.zeros(2), detections=(det,))
+    corners, v, owner = radar_obstacles(obs, pos[:2], 4.0)
     assert owner.tolist() == [0]  # only a's return of c is left
     centre = corners[0].mean(axis=0)
     assert np.hypot(*(centre - pos[2])) < 1.0  # the assumed box lands on c (radar: c's nearest corner)

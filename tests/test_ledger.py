@@ -4,7 +4,7 @@ import sqlite3
 import pandas as pd
 import pytest
 
-from sumo_avoid import ledger
+from sumo_avoid.studies import ledger
 
 
 def _row(key, status="done", error=None, seed=1):

@@ -1,23 +1,11 @@
-"""Hand-computed checks for sumo_avoid.metrics (m, s, rad)."""
+"""Hand-computed checks for sumo_avoid.metrics.basic (m, s, rad)."""
 import math
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from sumo_avoid.metrics import (
-    F1,
-    F2,
-    F3,
-    braking_curve_D,
-    collision_events,
-    fitness,
-    min_gap_m,
-    motion_summary,
-    phi_coll,
-    phi_wall,
-    transfer_S,
-)
+from sumo_avoid.metrics.basic import F1, F2, F3, braking_curve_D, collision_events, fitness, min_gap_m, motion_summary, phi_coll, phi_wall, transfer_S
 
 DT = 0.5
 
@@ -192,8 +180,8 @@ def test_motion_summary_straight_line():
 
 def test_pair_chunking_does_not_change_results(monkeypatch):
     # brute force (loops, test only) vs the vectorised code with tiny chunks
-    import sumo_avoid.metrics as mt
-    from sumo_avoid.geometry import convex_overlap, footprint_corners
+    import sumo_avoid.metrics.basic as mt
+    from sumo_avoid.core.geometry import convex_overlap, footprint_corners
 
     rng = np.random.default_rng(3)
     rows = []

@@ -1,4 +1,4 @@
-"""The reference simulator's noise processes (sumo_avoid.noise): hand-computed steps and the
+"""The reference simulator's noise processes (sumo_avoid.core.noise): hand-computed steps and the
 stationary spread of the GPS walk against its closed form."""
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from sumo_avoid.noise import DampedRandomWalk, velocity_kick
+from sumo_avoid.core.noise import DampedRandomWalk, velocity_kick
 
 
 class _Fixed:

@@ -12,10 +12,10 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from sumo_avoid import order
-from sumo_avoid.arena import outside_distance, square
-from sumo_avoid.metrics import phi_coll, phi_wall
-from sumo_avoid.order import flocking_metrics, order_parameters
+from sumo_avoid.metrics import order
+from sumo_avoid.metrics.basic import phi_coll, phi_wall
+from sumo_avoid.metrics.order import flocking_metrics, order_parameters
+from sumo_avoid.rollout.arena import outside_distance, square
 
 
 def _table(rows):

@@ -7,8 +7,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from sumo_avoid.plotting import footprint_corners, plot_timeseries, plot_trajectories
-from sumo_avoid.road import Road
+from sumo_avoid.plots.trajectories import footprint_corners, plot_timeseries, plot_trajectories
+from sumo_avoid.sumo.road import Road
 
 NETS = pathlib.Path(__file__).resolve().parents[1] / "nets"
 COLUMNS = ["step", "time_s", "id", "is_ego", "x", "y", "vx", "vy", "speed", "heading", "length", "width"]
@@ -74,7 +74,7 @@ def test_plot_timeseries_writes_png(tmp_path):
 def test_turn_gets_a_close_up_and_a_straight_run_does_not():
     """The middle of an ego's largest turn (heading change > 45 degrees) or its first collision is
     where the close-up goes; a run along a road gets none. The close-up sits in the emptiest corner."""
-    from sumo_avoid.plotting import _emptiest_corners, _zoom_centre
+    from sumo_avoid.plots.trajectories import _emptiest_corners, _zoom_centre
 
     t = np.linspace(0.0, np.pi / 2, 91)  # quarter circle of radius 20 m about (0, 0), heading north -> west
     x, y = 20.0 * np.cos(t), 20.0 * np.sin(t)

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from radar_reference import _shadowed, visible_reference
-from sumo_avoid.sensors.occlusion import depth
-from sumo_avoid.sensors.radar import Radar, RadarParams
-from sumo_avoid.snapshot import Snapshot
+from sumo_avoid.sensing.occlusion import depth
+from sumo_avoid.sensing.radar import Radar, RadarParams
+from sumo_avoid.core.snapshot import Snapshot
 
 EXACT = dict(range_sigma_m=0.0, speed_sigma_mps=0.0, angular_resolution_deg=0.0)
 
@@ -180,7 +180,7 @@ def test_params_validation():
 
 
 def test_tracker_coasts_a_car_that_left_the_fov_and_drops_it_when_it_should_be_seen():
-    from sumo_avoid.sensors.perception import perceived_obstacles, velocity_estimate
+    from sumo_avoid.sensing.perception import perceived_obstacles, velocity_estimate
 
     r = Radar(RadarParams(memory_s=5.0, **EXACT), np.random.default_rng(0))
     # a car 10 m ahead-left in the next lane, 2 m/s slower: seen; radial-speed velocity estimate
@@ -207,7 +207,7 @@ def test_tracker_coasts_a_car_that_left_the_fov_and_drops_it_when_it_should_be_s
 
 
 def test_detection_log_table():
-    from sumo_avoid.sensors.log import detections_table
+    from sumo_avoid.sensing.log import detections_table
 
     r = Radar(RadarParams(log_detections=True, **EXACT), np.random.default_rng(0))
     r.scan(snap([EGO, ("A", 22.25, 0.0, 5.0, 0.0, 4.5, 1.8)]), ["ego"])
@@ -219,7 +219,7 @@ def test_detection_log_table():
 
 
 def test_tracker_gate_matches_only_returns_of_the_same_ego():
-    from sumo_avoid.sensors.tracker import _near_same_ego
+    from sumo_avoid.sensing.tracker import _near_same_ego
 
     p = np.array([[0.0, 0.0], [0.0, 0.0], [100.0, 0.0]])
     e = np.array([0, 1, 1])
@@ -245,7 +245,7 @@ def test_rear_radar_sees_behind_not_ahead():
 def test_velocity_estimate_along_the_road_not_the_turning_ego():
     """A car straight ahead-left moving at 13 m/s along +x, seen by an ego turned 0.5 rad left:
     along the ego's heading the estimate is wrong (has a y part); along the road (0 rad) exact."""
-    from sumo_avoid.sensors.perception import perceived_obstacles, velocity_estimate
+    from sumo_avoid.sensing.perception import perceived_obstacles, velocity_estimate
 
     ego = ("ego", 0.0, 0.0, 5.0 * math.cos(0.5), 5.0 * math.sin(0.5), 4.0, 1.8)
     s = snap([ego, ("A", 20.0, 8.0, 13.0, 0.0, 4.5, 1.8)])
@@ -262,7 +262,7 @@ def test_velocity_estimate_along_the_road_not_the_turning_ego():
 def test_tracker_coasts_along_the_given_traffic_direction():
     """The ego is turned 0.3 rad left; car A ahead drives along +x at 8 m/s. Coasted along the
     ego's heading its track drifts sideways; along the route (0 rad) it stays in A's lane."""
-    from sumo_avoid.sensors.tracker import Tracker
+    from sumo_avoid.sensing.tracker import Tracker
 
     ego = ("ego", 0.0, 0.0, 10.0 * math.cos(0.3), 10.0 * math.sin(0.3), 4.0, 1.8)
     s0 = snap([ego, ("A", 14.25, 3.5, 8.0, 0.0, 4.5, 1.8)], t=0.0)
@@ -282,7 +282,7 @@ def test_tracker_coasts_along_the_given_traffic_direction():
 
 
 def test_route_directions_hand_values():
-    from sumo_avoid.runner import route_directions
+    from sumo_avoid.core.polyline import route_directions
 
     path = np.array([[0.0, 0.0], [100.0, 0.0], [100.0, 100.0]])
     d = route_directions([path, None, path], np.array([[50.0, 2.0], [0.0, 0.0], [100.0, 50.0]]),
@@ -337,8 +337,8 @@ def test_compiled_footprints_and_candidates_equal_the_numpy_and_kdtree_versions(
     along one axis) gives exactly the (ego, target) pairs of the k-d tree version it replaced, in
     the same order, on random scenes, dense jams and a road along y (the sweep then runs on y)."""
     from radar_reference import _candidates
-    from sumo_avoid.geometry import footprint_corners
-    from sumo_avoid.sensors.occlusion import boxes, candidates
+    from sumo_avoid.core.geometry import footprint_corners
+    from sumo_avoid.sensing.occlusion import boxes, candidates
 
     rng = np.random.default_rng(5)
     pairs = 0

@@ -4,7 +4,9 @@ import re
 
 import pytest
 
-from sumo_avoid import evaluate, runner, scenario
+from sumo_avoid import outputs as evaluate
+from sumo_avoid.rollout import runner
+from sumo_avoid.scenario import spec as scenario
 
 SCN = pathlib.Path(__file__).resolve().parent.parent / "scenarios"
 
@@ -21,7 +23,7 @@ def radar_brake(tmp_path, speed_mps: float, safety: str):
     rou.write_text(xml)
     scn = scenario.load(SCN / "radar_brake.toml", [f"sim.routes=['{rou}']", f"controllers.scripted.speed_mps={speed_mps}",
                                                    f'ego.safety="{safety}"', "sim.duration_s=28"])
-    return evaluate.compute(runner.run(scn))
+    return evaluate.run_metrics(runner.run(scn))
 
 
 @pytest.mark.parametrize("kmh", [50, 80, 100])
@@ -47,7 +49,7 @@ def test_radar_brake_without_the_layer_crashes_at_100(tmp_path):
 @pytest.mark.parametrize("seed", range(1, 11))
 def test_overtaking_on_radar_reaches_goal(seed):
     scn = scenario.load(SCN / "overtaking.toml", ['ego.sensor="radar"'], seed=seed)
-    m = evaluate.compute(runner.run(scn))
+    m = evaluate.run_metrics(runner.run(scn))
     assert "radar_warnings" in m and "min_danger_time_s" in m
     assert m["goal_reached"] and m["collisions"] == 0
 
@@ -58,7 +60,7 @@ def test_overtaking_with_a_rear_radar_too():
     scn = scenario.load(SCN / "overtaking.toml", ['ego.sensor="radar"', "radar.rear=true",
                                                    "radar.log_detections=true"], seed=1)
     res = runner.run(scn)
-    m = evaluate.compute(res)
+    m = evaluate.run_metrics(res)
     assert m["goal_reached"] and m["collisions"] == 0
     assert {d.mount for d in res.radar_log} == {"front", "rear"}
 
@@ -66,5 +68,5 @@ def test_overtaking_with_a_rear_radar_too():
 def test_cut_in_with_layer_no_collision():
     scn = scenario.load(SCN / "cut_in.toml", ['ego.controller="scripted"', "controllers.scripted.speed_mps=25",
                                               "sim.duration_s=15"])
-    m = evaluate.compute(runner.run(scn))
+    m = evaluate.run_metrics(runner.run(scn))
     assert m["collisions"] == 0 and m["radar_brakes"] >= 1

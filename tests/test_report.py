@@ -6,7 +6,7 @@ import pathlib
 import pandas as pd
 import pytest
 
-from sumo_avoid import batch, ledger
+from sumo_avoid.studies import batch, ledger
 from sumo_avoid.cli import main
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]

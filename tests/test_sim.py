@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from conftest import ROOT, SCENARIOS
-from sumo_avoid.sim import SumoSim, sumo_args
-from sumo_avoid.snapshot import Snapshot
+from sumo_avoid.sumo.sim import SumoSim, sumo_args
+from sumo_avoid.core.snapshot import Snapshot
 
 
 def _start():

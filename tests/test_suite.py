@@ -5,8 +5,8 @@ import xml.etree.ElementTree as ET
 import pytest
 
 from sumo_avoid.cli import main
-from sumo_avoid.config import ScenarioError
-from sumo_avoid.suite import Criterion
+from sumo_avoid.core.config import ScenarioError
+from sumo_avoid.studies.suite import Criterion
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 OVERTAKING = ROOT / "scenarios" / "overtaking.toml"
@@ -99,7 +99,7 @@ def test_bad_suite_is_one_line_exit_2(tmp_path, capsys):
 
 
 def test_project_suite_file_is_valid():
-    from sumo_avoid import suite
+    from sumo_avoid.studies import suite
 
     entries = suite.load(ROOT / "scenarios" / "suite.toml")
     assert len(entries) >= 2 and all(e.criteria for e in entries)

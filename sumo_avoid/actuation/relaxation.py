@@ -1,0 +1,83 @@
+"""The reference simulator's vehicle response (SPEC §1.3, flocking): velocity relaxation
+dv/dt = (v_des - v)/τ with |dv/dt| <= a_max, heading along the velocity, optional outer noise.
+
+The actuator holds each ego's velocity itself (SUMO's reported speed of an off-lane vehicle is
+unreliable) and hands it back through :meth:`RelaxationActuator.held`.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from sumo_avoid.actuation.params import ActuatorConfig
+from sumo_avoid.core.noise import velocity_kick
+from sumo_avoid.core.snapshot import Snapshot
+from sumo_avoid.core.types import EgoTask, Motion, Observation
+
+
+def relax(vel, v_des, tau_s: float, max_accel_mps2: float, dt_s: float):
+    """Reference-simulator vehicle response: dv/dt = (v_des - v)/τ with |dv/dt| <= a_max.
+
+    vel, v_des (E,2) m/s. Returns (new velocity (E,2), acceleration used (E,2)); the caller moves
+    the vehicle by new_velocity·dt (semi-implicit Euler).
+    """
+    vel = np.asarray(vel, float).reshape(-1, 2)
+    acc = (np.asarray(v_des, float).reshape(-1, 2) - vel) / tau_s
+    a = np.hypot(acc[:, 0], acc[:, 1])
+    scale = np.where(a > max_accel_mps2, max_accel_mps2 / np.maximum(a, 1e-12), 1.0)
+    acc = acc * scale[:, None]
+    return vel + acc * dt_s, acc
+
+
+def relaxation_step(pos, vel, heading, v_des, tau_s, max_accel_mps2, dt_s, kick=None):
+    """One step for every ego: returns (new centre (E,2), new velocity (E,2), heading (E,), speed (E,)).
+    The heading follows the velocity; a stopped vehicle keeps its heading. ``kick`` (E,2): velocity
+    noise added after the relaxation (the reference simulator's outer noise, :mod:`sumo_avoid.core.noise`)."""
+    new_vel, _ = relax(vel, v_des, tau_s, max_accel_mps2, dt_s)
+    if kick is not None:
+        new_vel = new_vel + kick
+    speed = np.hypot(new_vel[:, 0], new_vel[:, 1])
+    head = np.where(speed > 1e-6, np.arctan2(new_vel[:, 1], new_vel[:, 0]), np.asarray(heading, float))
+    return np.asarray(pos, float) + new_vel * dt_s, new_vel, head, speed
+
+
+class RelaxationActuator:
+    """Velocity relaxation (``actuator.mode = "relaxation"``); outer noise from its own stream."""
+
+    def __init__(self, limits: ActuatorConfig, dt_s: float, rng: np.random.Generator):
+        self.p, self.dt, self.rng = limits, dt_s, rng
+        self._speed: dict[str, float] = {}  # ego id -> speed it holds (NaN: not moved yet), m/s
+        self._vel: dict[str, np.ndarray] = {}  # ego id -> 2-D velocity it holds, m/s
+
+    def add_ego(self, task: EgoTask) -> None:
+        self._speed[task.vid] = np.nan
+
+    def remove_ego(self, vid: str) -> None:
+        self._speed.pop(vid, None)
+        self._vel.pop(vid, None)
+
+    def stats(self) -> dict:
+        return {}
+
+    def held(self, snap: Snapshot) -> Snapshot:
+        known = [(snap.index[v], w) for v, w in self._vel.items() if v in snap.index]
+        if not known:
+            return snap
+        vel = np.array(snap.vel)
+        rows, w = zip(*known)
+        vel[list(rows)] = np.array(w)
+        return replace(snap, vel=vel)
+
+    def speeds(self, snap: Snapshot, ego_ids) -> np.ndarray:
+        held = np.array([self._speed[v] for v in ego_ids])
+        return np.where(np.isnan(held), snap.speed[[snap.index[v] for v in ego_ids]], held)
+
+    def step(self, obs: Observation, command: np.ndarray) -> Motion:
+        snap, rows, p = obs.snapshot, obs.ego_rows, self.p
+        kick = velocity_kick(self.rng, p.outer_noise_m2ps3, self.dt, len(rows)) if p.outer_noise_m2ps3 > 0 else None
+        pos, vel, head, speed = relaxation_step(snap.pos[rows], snap.vel[rows], snap.heading[rows], command,
+                                                p.tau_s, p.relax_max_accel_mps2, self.dt, kick)
+        self._vel.update(zip(obs.ego_ids, vel))
+        self._speed.update(zip(obs.ego_ids, speed.tolist()))
+        return Motion(pos, head, speed)

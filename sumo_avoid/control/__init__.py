@@ -1,0 +1,17 @@
+"""Controllers by name (``ego.controller``): ``CONTROLLERS[name]`` -> (class, frozen parameters).
+
+Every controller is built as ``cls(params, context)`` (:class:`sumo_avoid.core.interfaces.Context`)
+and follows :class:`sumo_avoid.core.interfaces.Controller`. A new controller is one file here plus
+one line below (docs/writing_a_controller.md).
+"""
+from sumo_avoid.control.apf import ApfController, ApfParams
+from sumo_avoid.control.apf_sa import ApfSaController, ApfSaParams
+from sumo_avoid.control.flocking import FlockingController, FlockingParams
+from sumo_avoid.control.scripted import ScriptedController, ScriptedParams
+from sumo_avoid.core.registry import Registry
+
+CONTROLLERS = Registry("controller")
+CONTROLLERS.register("apf", ApfController, ApfParams)
+CONTROLLERS.register("apf_sa", ApfSaController, ApfSaParams)
+CONTROLLERS.register("flocking", FlockingController, FlockingParams)
+CONTROLLERS.register("scripted", ScriptedController, ScriptedParams)

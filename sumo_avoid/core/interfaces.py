@@ -1,0 +1,97 @@
+"""The plug-in interfaces of one rollout step, and the context a plug-in is built with.
+
+Per step the data flows one way (:func:`sumo_avoid.rollout.loop.rollout`)::
+
+    Snapshot --Sensor.observe--> Observation --Controller.act--> command (E, 2) m/s
+             --Layer.filter (each, in order)--> command --Actuator.step--> Motion --> SUMO
+
+Every stage is told about each ego when the plug-in takes it over (``add_ego``) and when it is
+retired (``remove_ego``), and may report counters for ``metrics.json`` (``stats``). Stages are
+chosen by name from the scenario through one :class:`~sumo_avoid.core.registry.Registry` per kind.
+Metrics (:class:`~sumo_avoid.metrics.base.Metric`) run afterwards on the recording, never in the loop.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, ClassVar, Protocol
+
+import numpy as np
+
+from sumo_avoid.core.snapshot import Snapshot
+from sumo_avoid.core.types import EgoTask, Motion, Needs, Observation
+
+
+@dataclass(frozen=True)
+class Context:
+    """What every plug-in may be built with (run-wide, fixed before the first step)."""
+
+    seed: int  # the scenario seed
+    step_s: float  # simulation step, s
+    road: Any = None  # sumo_avoid.sumo.road.Road: drivable area, edges, lines, route paths (read-only)
+    walls: np.ndarray | None = None  # (k, 2) allowed area when the scenario has an [arena], else None
+    obstacles: tuple[np.ndarray, ...] = field(default=())  # static obstacle polygons, each (k, 2) m
+
+    def rng(self, *stream: int) -> np.random.Generator:
+        """The random stream of one consumer: ``default_rng(seed)`` (the controller's) or
+        ``default_rng([seed, *stream])``; streams never share draws, so adding one changes no other."""
+        return np.random.default_rng([self.seed, *stream] if stream else self.seed)
+
+
+class EgoAware(Protocol):
+    def add_ego(self, task: EgoTask) -> None: ...
+
+    def remove_ego(self, vid: str) -> None: ...
+
+    def stats(self) -> dict:  # counters for metrics.json
+        ...
+
+
+class Sensor(EgoAware, Protocol):
+    def observe(self, snap: Snapshot, ego_ids: tuple[str, ...], ego_speed: np.ndarray) -> Observation: ...
+
+    def tables(self) -> dict:  # name -> pandas DataFrame written as NAME.csv (e.g. detections)
+        ...
+
+
+class Controller(EgoAware, Protocol):
+    """Built as ``cls(params, context)``; declares what it needs as data (``needs``)."""
+
+    needs: ClassVar[Needs]
+    metrics: ClassVar[tuple[str, ...]]  # names in sumo_avoid.metrics.METRICS computed beside the standard set
+
+    def act(self, obs: Observation) -> np.ndarray:  # (E, 2) desired velocity, m/s
+        ...
+
+
+class Layer(EgoAware, Protocol):
+    """Between controller and actuator: limits (or only watches) the command."""
+
+    needs_scans: ClassVar[bool]  # wants Observation.scans (a radar on board) even with ground truth
+
+    def filter(self, obs: Observation, command: np.ndarray) -> np.ndarray: ...
+
+
+class Actuator(EgoAware, Protocol):
+    """Turns commands into motion within the vehicle's limits; owns its state (held speed, velocity)."""
+
+    def held(self, snap: Snapshot) -> Snapshot:  # the snapshot with what the actuator knows better
+        ...
+
+    def speeds(self, snap: Snapshot, ego_ids: tuple[str, ...]) -> np.ndarray:  # (E,) signed, m/s
+        ...
+
+    def step(self, obs: Observation, command: np.ndarray) -> Motion: ...
+
+
+class SetupHook(Protocol):
+    """Something done once, after SUMO started and before the first step (spawn, polygons)."""
+
+    def setup(self, sim: Any) -> None: ...
+
+
+class Callback(Protocol):
+    """Watches the loop (progress, timing, plots); never changes what happens."""
+
+    def on_step(self, snap: Snapshot, n_steps: int) -> None: ...
+
+    def on_end(self) -> None: ...

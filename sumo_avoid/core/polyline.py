@@ -1,0 +1,87 @@
+"""Polylines (route reference paths): arc length, point at s, projection, and the route's direction
+at many vehicles at once. Pure numpy; shared by sensing, control and metrics."""
+from __future__ import annotations
+
+import numpy as np
+
+def _as_path(path) -> np.ndarray:
+    p = np.asarray(path, dtype=float).reshape(-1, 2)
+    if len(p) == 0:
+        raise ValueError("empty polyline")
+    return p
+
+
+def _cumlen(p: np.ndarray) -> np.ndarray:
+    seg = np.hypot(*np.diff(p, axis=0).T) if len(p) > 1 else np.zeros(0)
+    return np.concatenate([[0.0], np.cumsum(seg)])
+
+
+def polyline_length(path) -> float:
+    """Total arc length of a (P,2) polyline, m."""
+    return float(_cumlen(_as_path(path))[-1])
+
+
+def polyline_point_at(path, s_m: float) -> np.ndarray:
+    """Point at arc length ``s_m`` along the polyline (clamped to [0, length]) -> (2,)."""
+    p = _as_path(path)
+    cum = _cumlen(p)
+    s = float(np.clip(s_m, 0.0, cum[-1]))
+    return np.array([np.interp(s, cum, p[:, 0]), np.interp(s, cum, p[:, 1])])
+
+
+def polyline_project(path, point) -> float:
+    """Arc length of the point of the polyline nearest to ``point`` (m)."""
+    p = _as_path(path)
+    q = np.asarray(point, dtype=float).reshape(2)
+    if len(p) == 1:
+        return 0.0
+    a, b = p[:-1], p[1:]
+    d = b - a
+    l2 = np.einsum("ij,ij->i", d, d)
+    t = np.where(l2 > 0, np.einsum("ij,ij->i", q - a, d) / np.where(l2 > 0, l2, 1.0), 0.0)
+    t = np.clip(t, 0.0, 1.0)
+    foot = a + t[:, None] * d
+    dist2 = np.einsum("ij,ij->i", foot - q, foot - q)
+    k = int(np.argmin(dist2))
+    return float(_cumlen(p)[k] + t[k] * np.sqrt(l2[k]))
+
+
+def route_segments(paths):
+    """The egos' route paths as padded segment arrays for :func:`route_directions`: (rows with a
+    path, segment starts (P, S, 2), segment vectors (P, S, 2), squared lengths (P, S)); NaN pads."""
+    ok = [k for k, p in enumerate(paths) if p is not None and len(p) > 1]
+    S = max([len(paths[k]) - 1 for k in ok], default=0)
+    a = np.full((len(ok), S, 2), np.nan)
+    b = np.full((len(ok), S, 2), np.nan)
+    for i, k in enumerate(ok):
+        p = np.asarray(paths[k], float)
+        a[i, :len(p) - 1], b[i, :len(p) - 1] = p[:-1], p[1:]
+    ab = b - a
+    return ok, a, ab, (ab**2).sum(-1)
+
+
+def route_directions(paths, pos, heading, segments=None) -> np.ndarray:
+    """(E,) rad: direction of the segment of each ego's route path nearest to it (its heading if it
+    has no path). Vectorised over egos: paths padded to one (E, S) segment array, which a caller
+    may pass in precomputed (``segments = route_segments(paths)``) while the egos stay the same."""
+    out = np.asarray(heading, float).copy()
+    ok, a, ab, L2 = route_segments(paths) if segments is None else segments
+    if not ok:
+        return out
+    rel = np.asarray(pos, float)[ok][:, None, :] - a
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.clip((rel * ab).sum(-1) / L2, 0.0, 1.0)
+    d2 = ((rel - t[..., None] * ab) ** 2).sum(-1)
+    d2 = np.where(np.isfinite(d2) & (L2 > 1e-18), d2, np.inf)
+    seg = np.take_along_axis(ab, d2.argmin(axis=1)[:, None, None], axis=1)[:, 0]
+    out[ok] = np.arctan2(seg[:, 1], seg[:, 0])
+    return out
+
+
+def polyline_tangent(path, point):
+    """At the path's point nearest to ``point``: (arc length s, that point (2,), unit tangent (2,)),
+    the tangent pointing from the path's point at s to the one 1 m further along it."""
+    s = polyline_project(path, point)
+    a = polyline_point_at(path, s)
+    d = polyline_point_at(path, s + 1.0) - a
+    return s, a, d / max(np.hypot(d[0], d[1]), 1e-12)

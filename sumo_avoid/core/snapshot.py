@@ -1,0 +1,59 @@
+"""The immutable view of the world that everything downstream of :mod:`sumo_avoid.sumo.sim` sees.
+
+Conventions (SPEC preamble): metres, seconds, SUMO network coordinates (x east, y north).
+Positions are vehicle *centres*; headings are math angles in radians, counter-clockwise from +x.
+SUMO's front-bumper position and compass angle are converted once, in :mod:`sumo_avoid.sumo.sim`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+def _frozen(a, dtype=float) -> np.ndarray:
+    arr = np.array(a, dtype=dtype, copy=True)
+    arr.flags.writeable = False
+    return arr
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """All vehicles in the simulation at one instant (N rows, same order in every array)."""
+
+    time_s: float
+    ids: tuple[str, ...]
+    pos: np.ndarray  # (N, 2) centre position, m
+    vel: np.ndarray  # (N, 2) velocity, m/s
+    heading: np.ndarray  # (N,) rad, CCW from +x
+    length: np.ndarray  # (N,) m
+    width: np.ndarray  # (N,) m
+    is_ego: np.ndarray  # (N,) bool, vehicles driven by the plug-in
+    index: dict = field(default_factory=dict, compare=False, repr=False)  # id -> row
+
+    def __post_init__(self):
+        n = len(self.ids)
+        object.__setattr__(self, "pos", _frozen(self.pos).reshape(n, 2))
+        object.__setattr__(self, "vel", _frozen(self.vel).reshape(n, 2))
+        for name in ("heading", "length", "width"):
+            object.__setattr__(self, name, _frozen(getattr(self, name)).reshape(n))
+        object.__setattr__(self, "is_ego", _frozen(self.is_ego, bool).reshape(n))
+        object.__setattr__(self, "ids", tuple(self.ids))
+        object.__setattr__(self, "index", {vid: i for i, vid in enumerate(self.ids)})
+
+    @property
+    def n(self) -> int:
+        return len(self.ids)
+
+    @property
+    def speed(self) -> np.ndarray:
+        return np.hypot(self.vel[:, 0], self.vel[:, 1])
+
+    @property
+    def ego_rows(self) -> np.ndarray:
+        return np.flatnonzero(self.is_ego)
+
+    @staticmethod
+    def empty(time_s: float = 0.0) -> "Snapshot":
+        z = np.zeros(0)
+        return Snapshot(time_s, (), np.zeros((0, 2)), np.zeros((0, 2)), z, z, z, np.zeros(0, bool))

@@ -1,0 +1,101 @@
+"""The data that flows through one step of the rollout, as immutable, fully typed records.
+
+snapshot (:class:`~sumo_avoid.core.snapshot.Snapshot`) -> sensor -> :class:`Observation` ->
+controller -> command ((E, 2) desired velocity, m/s) -> layers -> actuator -> :class:`Motion`.
+A plug-in is told about each ego once, when the plug-in takes it over (:class:`EgoTask`).
+Nothing here talks to SUMO.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+from sumo_avoid.core.snapshot import Snapshot
+
+
+@dataclass(frozen=True)
+class EgoTask:
+    vid: str
+    goal: np.ndarray  # (2,) m
+    path: np.ndarray  # (P, 2) reference polyline along the ego's route, m
+    cruise_speed_mps: float
+
+
+@dataclass(frozen=True)
+class Detections:
+    """One scan of all egos' radars: D detections, each row belongs to ego ``ego[i]``."""
+
+    time_s: float
+    ego_ids: tuple[str, ...]  # the egos scanned (index space of ``ego``)
+    sensor_pos: np.ndarray  # (E, 2) radar positions (bumper centres), m
+    sensor_heading: np.ndarray  # (E,) boresight, rad CCW from +x
+    sensor_vel: np.ndarray  # (E, 2) ego velocities, m/s
+    ego: np.ndarray  # (D,) int index into ego_ids
+    range_m: np.ndarray  # (D,)
+    azimuth_rad: np.ndarray  # (D,) CCW from the boresight
+    radial_speed_mps: np.ndarray  # (D,) relative speed along the line of sight (< 0 closing)
+    target: tuple[str, ...] = field(default=())  # (D,) true target id, "" = false alarm. EVALUATION ONLY
+    mount: str = "front"  # which radar: "front" (boresight = heading) or "rear" (boresight = heading + pi)
+
+    @property
+    def n(self) -> int:
+        return len(self.range_m)
+
+    def points(self) -> np.ndarray:
+        """(D, 2) world positions of the detections, m."""
+        a = self.sensor_heading[self.ego] + self.azimuth_rad
+        return self.sensor_pos[self.ego] + self.range_m[:, None] * np.column_stack([np.cos(a), np.sin(a)])
+
+    def of(self, vid: str) -> np.ndarray:
+        """Indices of the detections of ego ``vid``."""
+        return np.flatnonzero(self.ego == self.ego_ids.index(vid)) if vid in self.ego_ids else np.zeros(0, int)
+
+
+class NeighbourLink(Protocol):
+    """V2V: what each controlled vehicle knows of itself and receives from the others (flocking).
+
+    ``states(snapshot, rows)`` -> (own_pos, own_vel, nb_pos, nb_vel), each (E, 2), rows aligned with
+    ``rows``: own state as sensed now, the state the others receive (delayed, noisy). A controller
+    calls it when it updates (the link keeps the message history and the noise state)."""
+
+    def states(self, snap: Snapshot, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...
+
+
+@dataclass(frozen=True)
+class Observation:
+    """What the sensor hands the controller (and the layers) at one step.
+
+    With ground truth (``detections is None``) a controller reads other vehicles from the snapshot;
+    with radar it takes them from ``detections`` (sensing.perception), never from the snapshot's
+    other rows (``Detections.target`` is for evaluation only)."""
+
+    snapshot: Snapshot
+    ego_ids: tuple[str, ...]  # egos to control, in the order of the returned velocities
+    ego_rows: np.ndarray  # (E,) int, their rows in the snapshot
+    ego_speed: np.ndarray  # (E,) signed speed the actuator holds (negative = reversing), m/s
+    obstacles: tuple[np.ndarray, ...] = ()  # static obstacle polygons, each (k, 2) m
+    scans: tuple[Detections, ...] = ()  # this step's raw radar scans, one per mount (front first)
+    detections: tuple[Detections, ...] | None = None  # radar: scans + tracker memory, per mount; truth: None
+    route_heading: np.ndarray | None = None  # radar: (E,) rad, the traffic's direction at each ego
+    v2v: NeighbourLink | None = None  # controllers that declare Needs(v2v=True)
+
+    def index(self, vid: str) -> int:
+        """Position of ego ``vid`` in ``ego_ids`` (and in the command)."""
+        return self.ego_ids.index(vid)
+
+
+@dataclass(frozen=True)
+class Motion:
+    pos: np.ndarray  # (E, 2) new centre, m
+    heading: np.ndarray  # (E,) new heading, rad
+    speed: np.ndarray  # (E,) new signed speed along the heading, m/s (negative = reversing)
+
+
+@dataclass(frozen=True)
+class Needs:
+    """What a controller declares it needs (data, read by the assembly; the loop never probes)."""
+
+    goals: bool = True  # egos are retired at their goal (a flock has none)
+    v2v: bool = False  # flock members' states over V2V (Observation.v2v)

@@ -1,0 +1,26 @@
+"""Metrics of a finished run, by name (``output.metrics``; default: :data:`STANDARD` plus the
+controller's own). Each is a :class:`~sumo_avoid.metrics.base.Metric`; later ones win on a shared key."""
+from sumo_avoid.core.registry import Registry
+from sumo_avoid.metrics.base import clean
+from sumo_avoid.metrics.flocking import FlockingOrder
+from sumo_avoid.metrics.standard import Collisions, MinGap, Motion, PhiColl, PhiWall, PluginStats, RunInfo
+
+METRICS = Registry("metric")
+METRICS.register("run", RunInfo)
+METRICS.register("collisions", Collisions)
+METRICS.register("min_gap", MinGap)
+METRICS.register("phi_coll", PhiColl)
+METRICS.register("phi_wall", PhiWall)
+METRICS.register("plugin_stats", PluginStats)
+METRICS.register("motion", Motion)
+METRICS.register("flocking", FlockingOrder)
+
+STANDARD = ("run", "collisions", "min_gap", "phi_coll", "phi_wall", "plugin_stats", "motion")
+
+
+def compute(run, names=STANDARD) -> dict:
+    """``metrics.json`` of a run: the named metrics in order, JSON-ready."""
+    out: dict = {}
+    for name in names:
+        out.update(METRICS[name].factory().compute(run))
+    return clean(out)

@@ -1,0 +1,78 @@
+"""From a validated scenario to the plug-ins of one run, each chosen by name through its registry.
+
+Choices made here (data, so the loop never asks):
+
+* the controller is ``ego.controller`` (:data:`sumo_avoid.control.CONTROLLERS`), built with the
+  scenario's ``[controllers.NAME]`` parameters and the controller's random stream ``default_rng(seed)``;
+* the layers: ``ego.safety`` (:data:`sumo_avoid.safety.LAYERS`, "none" = no layer); with a radar
+  on board (``ego.sensor = "radar"``) and no layer, the danger-time layer still runs as a monitor
+  (its counters in metrics.json, the command untouched), as before the plug-ins;
+* the sensor is ``ego.sensor`` (:data:`sumo_avoid.sensing.SENSORS`); it carries a front radar
+  (stream ``[seed, 4]``, a rear one on ``[seed, 5]``) when it is the radar or a layer needs scans,
+  and the V2V link (stream ``default_rng(seed)``) when the controller declares ``Needs(v2v=True)``;
+* the actuator is ``actuator.mode`` (:data:`sumo_avoid.actuation.ACTUATORS`, outer noise on ``[seed, 7]``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from sumo_avoid.actuation import ACTUATORS
+from sumo_avoid.control import CONTROLLERS
+from sumo_avoid.core.interfaces import Actuator, Context, Controller, Layer, Sensor
+from sumo_avoid.core.types import EgoTask
+from sumo_avoid.metrics import STANDARD
+from sumo_avoid.safety import LAYERS
+from sumo_avoid.sensing import SENSORS
+
+
+@dataclass(frozen=True)
+class Stack:
+    sensor: Sensor
+    controller: Controller
+    layers: tuple[Layer, ...]
+    actuator: Actuator
+
+    @property
+    def stages(self) -> tuple:
+        return (self.sensor, self.controller, *self.layers, self.actuator)
+
+    def add_ego(self, task: EgoTask) -> None:
+        for stage in self.stages:
+            stage.add_ego(task)
+
+    def remove_ego(self, vid: str) -> None:
+        for stage in self.stages:
+            stage.remove_ego(vid)
+
+    def stats(self) -> dict:
+        out: dict = {}
+        for stage in (self.controller, *self.layers, self.sensor, self.actuator):
+            out.update(stage.stats())
+        return out
+
+    def tables(self) -> dict:
+        return self.sensor.tables()
+
+
+def controller_for(scn, ctx: Context) -> Controller:
+    entry = CONTROLLERS[scn.spec.ego.controller]
+    return entry.factory(scn.params, ctx)
+
+
+def assemble(scn, ctx: Context, controller: Controller) -> Stack:
+    spec = scn.spec
+    layers = []
+    if spec.ego.safety != "none":
+        layers.append(LAYERS[spec.ego.safety].factory(spec.safety, ctx, enforce=True))
+    elif spec.ego.sensor == "radar":
+        layers.append(LAYERS["danger_time"].factory(spec.safety, ctx, enforce=False))
+    needs_scans = any(type(layer).needs_scans for layer in layers)
+    sensor = SENSORS[spec.ego.sensor].factory(spec.radar, ctx, needs_scans=needs_scans,
+                                              v2v=controller.v2v_params() if type(controller).needs.v2v else None)
+    actuator = ACTUATORS[spec.actuator.mode].factory(spec.actuator, ctx)
+    return Stack(sensor, controller, tuple(layers), actuator)
+
+
+def metric_names(scn) -> tuple[str, ...]:
+    """``output.metrics``, or the standard set plus what the controller declares (``metrics``)."""
+    return scn.spec.output.metrics or STANDARD + CONTROLLERS[scn.spec.ego.controller].factory.metrics

@@ -1,0 +1,67 @@
+"""Per-step recording of the world into arrays; becomes one pandas table after the run.
+
+Egos are always recorded; other vehicles only within ``record_radius_m`` of an ego (0 = all), to
+keep big-traffic runs small. SUMO's own collision reports are kept beside, one event per pair and
+contact episode (consecutive steps), the same rule as the plug-in's own events.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from sumo_avoid.core.geometry import near_any
+from sumo_avoid.core.snapshot import Snapshot
+
+COLUMNS = ["step", "time_s", "id", "is_ego", "x", "y", "vx", "vy", "speed", "heading", "length", "width"]
+
+
+class Recorder:
+    def __init__(self, record_radius_m: float = 0.0):
+        self.radius = record_radius_m
+        self._chunks: list[tuple] = []
+        self._sumo_events: list[dict] = []
+        self._sumo_last: dict[tuple[str, str], int] = {}
+
+    def record(self, step: int, snap: Snapshot) -> None:
+        if snap.n == 0:
+            return
+        keep = snap.is_ego.copy()
+        if self.radius > 0 and keep.any():
+            keep |= near_any(snap.pos, snap.pos[snap.is_ego], self.radius)
+        elif self.radius <= 0:
+            keep[:] = True
+        idx = np.flatnonzero(keep)
+        if len(idx) == 0:
+            return
+        ids = np.array(snap.ids, dtype=object)[idx]
+        self._chunks.append((step, snap.time_s, ids, snap.is_ego[idx], snap.pos[idx], snap.vel[idx],
+                             snap.heading[idx], snap.length[idx], snap.width[idx]))
+
+    def record_sumo_collisions(self, step: int, collisions) -> None:
+        for c in collisions:
+            pair = tuple(sorted((c.collider, c.victim)))
+            if self._sumo_last.get(pair) != step - 1 and self._sumo_last.get(pair) != step:
+                self._sumo_events.append({"step": step, "time_s": c.time_s, "a": pair[0], "b": pair[1],
+                                          "collider": c.collider, "victim": c.victim, "type": c.kind,
+                                          "lane": c.lane})
+            self._sumo_last[pair] = step
+
+    def table(self) -> pd.DataFrame:
+        if not self._chunks:
+            return pd.DataFrame({c: pd.Series(dtype=float) for c in COLUMNS})
+        sizes = [len(c[2]) for c in self._chunks]
+        pos = np.concatenate([c[4] for c in self._chunks])
+        vel = np.concatenate([c[5] for c in self._chunks])
+        return pd.DataFrame({
+            "step": np.repeat([c[0] for c in self._chunks], sizes).astype(np.int64),
+            "time_s": np.repeat([c[1] for c in self._chunks], sizes),
+            "id": np.concatenate([c[2] for c in self._chunks]).astype(str),
+            "is_ego": np.concatenate([c[3] for c in self._chunks]),
+            "x": pos[:, 0], "y": pos[:, 1], "vx": vel[:, 0], "vy": vel[:, 1],
+            "speed": np.hypot(vel[:, 0], vel[:, 1]),
+            "heading": np.concatenate([c[6] for c in self._chunks]),
+            "length": np.concatenate([c[7] for c in self._chunks]),
+            "width": np.concatenate([c[8] for c in self._chunks]),
+        })
+
+    def sumo_events(self) -> pd.DataFrame:
+        return pd.DataFrame(self._sumo_events, columns=["step", "time_s", "a", "b", "collider", "victim", "type", "lane"])

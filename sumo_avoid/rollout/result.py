@@ -1,0 +1,42 @@
+"""What a run leaves behind: the recording and what the metrics need to read it."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+import pandas as pd
+
+
+@dataclass(frozen=True)
+class Scene:
+    """The static world of a run: the road (sumo_avoid.sumo.road.Road), an arena's walls, obstacles."""
+
+    road: Any
+    walls: np.ndarray | None = None  # (k, 2) arena square, or None on a road
+    obstacles: tuple[np.ndarray, ...] = ()  # static obstacle polygons, each (k, 2) m
+
+
+@dataclass(frozen=True)
+class RunResult:
+    scenario: Any  # sumo_avoid.scenario.spec.Scenario
+    scene: Scene
+    traj: pd.DataFrame  # one row per recorded vehicle per step (rollout.recorder)
+    sumo_events: pd.DataFrame  # SUMO's own collision reports
+    goals: dict  # ego id -> (x, y)
+    steps: int
+    sim_time_s: float
+    stats: dict  # the plug-ins' counters (controller, layers, sensor, actuator)
+    timings: dict = field(default_factory=dict)
+    tables: dict = field(default_factory=dict)  # name -> DataFrame, written as NAME.csv (e.g. detections)
+    _memo: dict = field(default_factory=dict, compare=False, repr=False)
+
+    @property
+    def road(self):
+        return self.scene.road
+
+    def memo(self, key: str, compute: Callable[[], Any]) -> Any:
+        """A value several metrics share (e.g. phi_coll), computed once per run."""
+        if key not in self._memo:
+            self._memo[key] = compute()
+        return self._memo[key]

@@ -1,0 +1,271 @@
+"""Scenario files: TOML + SUMO XML, validated on load into frozen dataclasses.
+
+A scenario names a SUMO network, SUMO route files (vehicle types, vehicles, flows), which of
+those vehicles the plug-in drives (the egos), their controller and its parameters, the actuator
+limits and the output options. ``docs/scenario_format.md`` lists every key (generated from the
+dataclasses below by ``python -m sumo_avoid.scenario.spec``).
+"""
+from __future__ import annotations
+
+import math
+import pathlib
+import sys
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from sumo_avoid.core.config import ScenarioError, build, describe, field_doc
+
+from sumo_avoid.actuation import ACTUATORS
+from sumo_avoid.actuation.params import ActuatorConfig
+from sumo_avoid.control import CONTROLLERS
+from sumo_avoid.metrics import METRICS
+from sumo_avoid.safety import LAYERS
+from sumo_avoid.sensing import SENSORS
+from sumo_avoid.sumo.road import Road
+from sumo_avoid.safety.danger_time import DangerTimeParams
+from sumo_avoid.sensing.radar import RadarParams
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    net: str = field_doc(doc="SUMO network file (.net.xml), relative to the scenario file")
+    routes: tuple[str, ...] = field_doc((), doc="SUMO route files (types, vehicles, flows), relative paths")
+    additional: tuple[str, ...] = field_doc((), doc="SUMO additional files (polygons, detectors), relative paths")
+    step_s: float = field_doc(0.1, doc="simulation step, s")
+    duration_s: float = field_doc(120.0, doc="time limit of the run, s")
+    seed: int = field_doc(1, doc="seed for SUMO and for the plug-in's random numbers")
+    lateral_resolution_m: float = field_doc(0.8, doc="SUMO sublane width, m (sublane model on)")
+    sumo_collisions: bool = field_doc(True, doc="SUMO's own collision check and output beside the plug-in's "
+                                                "footprint check (always on); off saves SUMO's pairwise per-lane "
+                                                "check (always off in an [arena])")
+
+    def __post_init__(self):
+        if self.step_s <= 0 or self.duration_s <= 0:
+            raise ValueError("sim.step_s and sim.duration_s > 0")
+        if self.lateral_resolution_m <= 0:
+            raise ValueError("sim.lateral_resolution_m > 0")
+
+
+@dataclass(frozen=True)
+class EgoConfig:
+    ids: tuple[str, ...] = field_doc((), doc="ids of vehicles in the route files that the plug-in drives "
+                                             "(may be empty when an [arena] spawns the egos)")
+    controller: str = field_doc("apf_sa", doc="controller name (see `sumo-avoid controllers`)")
+    sensor: str = field_doc("truth", doc="what controllers see: 'truth' (ground truth) or 'radar' ([radar] table)")
+    safety: str = field_doc("none", doc="safety layer over the controller: 'none' or 'danger_time' ([safety] table)")
+    cruise_speed_mps: float = field_doc(20.0, doc="desired cruising speed, m/s")
+    goal: tuple[float, ...] | None = field_doc(None, signed=True,
+                                               doc="goal [x, y] in net coordinates, m; default: end of each ego's route")
+    goal_tolerance_m: float = field_doc(5.0, doc="the goal is reached when an ego centre comes this close, m")
+
+    def __post_init__(self):
+        if self.goal is not None and len(self.goal) != 2:
+            raise ValueError("ego.goal = [x, y]")
+
+
+@dataclass(frozen=True)
+class ArenaConfig:
+    size_m: float = field_doc(250.0, doc="side of the square arena (virtual walls), m")
+    origin: tuple[float, ...] = field_doc((0.0, 0.0), signed=True, doc="lower-left corner [x, y] of the arena, m")
+    n_agents: int = field_doc(100, doc="number of flocking vehicles spawned at random inside the arena")
+    min_spacing_m: float = field_doc(6.0, doc="smallest distance between two start positions, m")
+    margin_m: float = field_doc(5.0, doc="start positions keep this far from walls and obstacles, m")
+    initial_speed_mps: float = field_doc(0.0, doc="initial speed (random heading), m/s")
+    length_m: float = field_doc(4.0, doc="vehicle length, m")
+    width_m: float = field_doc(1.8, doc="vehicle width, m")
+    id_prefix: str = field_doc("f", doc="vehicle ids are PREFIX0 .. PREFIX(N-1)")
+
+    def __post_init__(self):
+        if len(self.origin) != 2:
+            raise ValueError("arena.origin = [x, y]")
+        if self.size_m <= 0 or self.n_agents < 1:
+            raise ValueError("arena.size_m > 0 and arena.n_agents >= 1")
+
+    @property
+    def ids(self) -> tuple[str, ...]:
+        return tuple(f"{self.id_prefix}{k}" for k in range(self.n_agents))
+
+
+@dataclass(frozen=True)
+class ObstacleConfig:
+    id: str = field_doc(doc="obstacle id (also its SUMO polygon id)")
+    shape: tuple[tuple[float, ...], ...] = field_doc(signed=True, doc="convex polygon [[x, y], ...] in net coordinates, m")
+
+    def __post_init__(self):
+        if len(self.shape) < 3 or any(len(p) != 2 for p in self.shape):
+            raise ValueError(f"obstacle {self.id}: shape needs >= 3 points [x, y]")
+
+    @property
+    def polygon(self) -> np.ndarray:
+        """(k, 2) vertices, m."""
+        return np.asarray(self.shape, float)
+
+
+@dataclass(frozen=True)
+class OutputConfig:
+    record_radius_m: float = field_doc(300.0, doc="record non-ego vehicles within this distance of an ego, m (0 = all)")
+    plots: bool = field_doc(True, doc="write trajectory.png and timeseries.png")
+    metrics: tuple[str, ...] = field_doc((), doc="metrics to compute, by name (run, collisions, min_gap, phi_coll, phi_wall, plugin_stats, motion, flocking); empty = the standard set "
+                                                 "plus the controller's own (flocking: order parameters and fitness)")
+
+
+@dataclass(frozen=True)
+class ScenarioSpec:
+    name: str = field_doc(doc="scenario name")
+    sim: SimConfig = field_doc(doc="[sim] table")
+    ego: EgoConfig = field_doc(doc="[ego] table")
+    description: str = field_doc("", doc="free text")
+    actuator: ActuatorConfig = field_doc(ActuatorConfig(), doc="[actuator] table")
+    output: OutputConfig = field_doc(OutputConfig(), doc="[output] table")
+    controllers: dict = field_doc(default_factory=dict, doc="[controllers.NAME] tables: parameters of controller NAME")
+    radar: RadarParams = field_doc(RadarParams(), doc="[radar] table (docs/radar.md)")
+    safety: DangerTimeParams = field_doc(DangerTimeParams(), doc="[safety] table: danger-time levels (docs/radar.md)")
+    arena: ArenaConfig | None = field_doc(None, doc="[arena] table: spawn a flock in a square arena (flocking)")
+    obstacles: tuple[ObstacleConfig, ...] = field_doc((), doc="[[obstacles]] static convex polygons (id, shape)")
+
+    def __post_init__(self):
+        if not self.ego.ids and self.arena is None:
+            raise ValueError("at least one ego id in ego.ids (or an [arena] table)")
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A validated scenario with absolute paths and built controller parameters."""
+
+    spec: ScenarioSpec
+    path: pathlib.Path
+    net_file: pathlib.Path
+    route_files: tuple[pathlib.Path, ...]
+    additional_files: tuple[pathlib.Path, ...]
+    controller_params: dict  # name -> frozen params dataclass, for every registered controller
+
+    @property
+    def name(self) -> str:
+        return self.spec.name
+
+    @property
+    def params(self):
+        return self.controller_params[self.spec.ego.controller]
+
+
+def parse_override(text: str, file: str) -> tuple[list[str], object]:
+    """``KEY=VALUE`` -> (dotted path, value). VALUE is read as TOML, else taken as a string."""
+    if "=" not in text:
+        raise ScenarioError(file, text, "KEY=VALUE in --set", show_got=False)
+    key, raw = text.split("=", 1)
+    key = key.strip()
+    if not key or any(not part for part in key.split(".")):
+        raise ScenarioError(file, key or text, "a dotted key like sim.seed in --set", show_got=False)
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw
+    return key.split("."), value
+
+
+def apply_overrides(data: dict, overrides: list[str], file: str) -> dict:
+    data = _deepcopy(data)
+    for text in overrides:
+        path, value = parse_override(text, file)
+        node = data
+        for part in path[:-1]:
+            node = node.setdefault(part, {})
+            if not isinstance(node, dict):
+                raise ScenarioError(file, ".".join(path), "a key inside a table", show_got=False)
+        node[path[-1]] = value
+    return data
+
+
+def _deepcopy(d):
+    return {k: _deepcopy(v) if isinstance(v, dict) else v for k, v in d.items()}
+
+
+def read_toml(path: pathlib.Path) -> dict:
+    file = str(path)
+    if not path.is_file():
+        raise ScenarioError(file, "<file>", "an existing scenario file", show_got=False)
+    try:
+        with open(path, "rb") as fh:
+            return tomllib.load(fh)
+    except tomllib.TOMLDecodeError as e:
+        raise ScenarioError(file, "<syntax>", f"valid TOML ({e})", show_got=False) from None
+
+
+def load(path, overrides: list[str] = (), controller: str | None = None, seed: int | None = None) -> Scenario:
+    """Read, override and validate a scenario file. Raises :class:`ScenarioError`."""
+    path = pathlib.Path(path)
+    file = str(path)
+    data = apply_overrides(read_toml(path), list(overrides), file)
+    if controller is not None:
+        data.setdefault("ego", {})["controller"] = controller
+    if seed is not None:
+        data.setdefault("sim", {})["seed"] = seed
+    spec = build(ScenarioSpec, data, file)
+    for key, value, names in (("ego.controller", spec.ego.controller, CONTROLLERS.names()),
+                              ("ego.sensor", spec.ego.sensor, SENSORS.names()),
+                              ("ego.safety", spec.ego.safety, ["none", *LAYERS.names()]),
+                              ("actuator.mode", spec.actuator.mode, ACTUATORS.names()),
+                              *((f"output.metrics[{i}]", m, METRICS.names()) for i, m in enumerate(spec.output.metrics))):
+        if value not in names:
+            raise ScenarioError(file, key, f"one of {sorted(names)}", value)
+    params = {}
+    for entry in CONTROLLERS.entries():
+        params[entry.name] = build(entry.params, spec.controllers.get(entry.name, {}), file, f"controllers.{entry.name}")
+    for name in spec.controllers:
+        if name not in CONTROLLERS:
+            raise ScenarioError(file, f"controllers.{name}", f"a controller name, one of {CONTROLLERS.names()}", name)
+
+    base = path.resolve().parent
+
+    def existing(rel: str, key: str, what: str) -> pathlib.Path:
+        p = (base / rel).resolve()
+        if not p.is_file():
+            raise ScenarioError(file, key, f"an existing {what} file", rel)
+        return p
+
+    net = existing(spec.sim.net, "sim.net", "SUMO network")
+    routes = tuple(existing(r, f"sim.routes[{i}]", "SUMO route") for i, r in enumerate(spec.sim.routes))
+    adds = tuple(existing(r, f"sim.additional[{i}]", "SUMO additional") for i, r in enumerate(spec.sim.additional))
+    if spec.ego.goal is not None:
+        try:
+            road = Road.from_net_file(net)
+        except Exception as e:  # sumolib raises many kinds
+            raise ScenarioError(file, "sim.net", f"a readable SUMO network ({type(e).__name__})", spec.sim.net) from None
+        off = float(road.outside_distance([spec.ego.goal])[0])
+        if not math.isfinite(off) or off > 0.5:
+            raise ScenarioError(file, "ego.goal", f"a point on the network's drivable area ({off:.1f} m off it)",
+                                list(spec.ego.goal))
+    return Scenario(spec, path, net, routes, adds, params)
+
+
+def with_spec(scn: Scenario, **changes) -> Scenario:
+    return replace(scn, spec=replace(scn.spec, **changes))
+
+
+def format_reference() -> str:
+    """Markdown table of every scenario key (for docs/scenario_format.md)."""
+    lines = ["# Scenario file format", "",
+             "Generated by `sumo-avoid keys` from the config dataclasses (tests/test_docs.py keeps it in sync).",
+             "A scenario is a TOML file; paths are relative to it. Top-level keys, then one table per",
+             "section; `[controllers.NAME]` holds the parameters of controller NAME (only the chosen",
+             "controller's table is used, every table is validated). Any key can be overridden from the",
+             "command line with `--set dotted.key=VALUE` (VALUE is read as TOML).", "",
+             "| key | type | default | meaning |", "|---|---|---|---|"]
+    for key, tp, default, doc in describe(ScenarioSpec):
+        if key == "controllers":
+            continue
+        lines.append(f"| `{key}` | {tp} | `{default}` | {doc} |")
+    for entry in CONTROLLERS.entries():
+        for key, tp, default, doc in describe(entry.params, f"controllers.{entry.name}"):
+            lines.append(f"| `{key}` | {tp} | `{default}` | {doc} |")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    print(format_reference())

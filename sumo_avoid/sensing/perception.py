@@ -1,0 +1,99 @@
+"""Turn radar detections into obstacle footprints a controller can use (no target ids used).
+
+A radar return is one point (the nearest visible point of a target) with a radial speed. A
+controller that expects footprints gets, per detection, an assumed car-sized box
+(``ASSUMED_LENGTH_M`` x ``ASSUMED_WIDTH_M``) aligned with the ego's heading and placed just behind
+the reflection point along the line of sight, moving with the ego's velocity plus the measured
+radial speed explained by motion along the ego's heading (:func:`velocity_estimate`).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from sumo_avoid.core.geometry import footprint_corners, near_any
+
+ASSUMED_LENGTH_M = 4.5
+ASSUMED_WIDTH_M = 1.8
+
+
+def velocity_estimate(det, k=None, along=None) -> np.ndarray:
+    """(D,2) world velocity of returns ``k`` (all by default), m/s, from their radial speed only.
+
+    The tangential component is unobservable in one return; road traffic moves mostly along the
+    ego's heading h, so the target is taken to move along h at the speed s that explains the
+    measured radial speed: (s h - v_ego) . u = v_r. Exact for parallel traffic and for stationary
+    objects (s = 0). Where h . u < 0.3 (more than ~73 degrees off the heading) the radial-only
+    estimate v_ego + v_r u is used instead. ``along`` (rad, scalar or per return) replaces h by a
+    better guess of the traffic's direction, e.g. the road's where the ego is: while the ego turns
+    or changes lanes its heading is not the traffic's.
+    """
+    k = np.arange(det.n) if k is None else k
+    e = det.ego[k]
+    h = det.sensor_heading[e] if along is None else np.broadcast_to(np.asarray(along, float), e.shape)
+    hd = np.column_stack([np.cos(h), np.sin(h)])
+    a = det.sensor_heading[e] + det.azimuth_rad[k]  # line of sight, world frame
+    u = np.column_stack([np.cos(a), np.sin(a)])
+    vr = det.radial_speed_mps[k]
+    ve = det.sensor_vel[e]
+    c = (hd * u).sum(1)
+    along = (vr + (ve * u).sum(1)) / np.where(np.abs(c) >= 0.3, c, 1.0)
+    return np.where((np.abs(c) >= 0.3)[:, None], along[:, None] * hd, ve + vr[:, None] * u)
+
+
+def perceived_boxes(det, k=None, along=None, length_m: float = ASSUMED_LENGTH_M, width_m: float = ASSUMED_WIDTH_M):
+    """Returns ``k`` (all by default) as assumed boxes: (pos (M,2), heading (M,), length (M,),
+    width (M,), vel (M,2)); ``det.ego[k]`` says whose. Boxes and motion are aligned with ``along``
+    (rad, the traffic's direction) if given, else with the sensor's boresight."""
+    k = np.arange(det.n) if k is None else np.asarray(k, int)
+    M = len(k)
+    if M == 0:
+        z = np.zeros(0)
+        return np.zeros((0, 2)), z, z, z, np.zeros((0, 2))
+    e = det.ego[k]
+    h = det.sensor_heading[e] if along is None else np.full(M, float(along))  # box axis
+    a = det.sensor_heading[e] + det.azimuth_rad[k]  # line of sight, world frame
+    u = np.column_stack([np.cos(a), np.sin(a)])
+    hd = np.column_stack([np.cos(h), np.sin(h)])
+    nd = np.column_stack([-hd[:, 1], hd[:, 0]])
+    depth = 0.5 * length_m * np.abs((u * hd).sum(1)) + 0.5 * width_m * np.abs((u * nd).sum(1))
+    point = det.sensor_pos[e] + det.range_m[k][:, None] * u
+    pos = point + depth[:, None] * u
+    vel = velocity_estimate(det, k, along)
+    return pos, h, np.full(M, length_m), np.full(M, width_m), vel
+
+
+def perceived_obstacles(det, vid: str, length_m: float = ASSUMED_LENGTH_M, width_m: float = ASSUMED_WIDTH_M,
+                        along: float | None = None):
+    """Obstacles seen by ego ``vid`` (:func:`perceived_boxes` of its returns)."""
+    return perceived_boxes(det, det.of(vid), along, length_m, width_m)
+
+
+def obstacle_vehicles(obs, row: int, q, radius_m: float):
+    """Other vehicles for the ego at snapshot ``row`` as (pos, heading, length, width, vel):
+    from the radar when ``obs.detections`` is set (moving along ``obs.route_heading`` of that ego
+    if given, see :func:`perceived_boxes`), else ground truth within ``radius_m`` of q."""
+    snap = obs.snapshot
+    if obs.detections is not None:  # one scan per radar mount (front, rear)
+        route = obs.route_heading
+        along = None if route is None else float(route[obs.index(snap.ids[row])])
+        parts = [perceived_obstacles(d, snap.ids[row], along=along) for d in obs.detections]
+        return tuple(np.concatenate(x) for x in zip(*parts)) if len(parts) > 1 else parts[0]
+    d = np.hypot(*(snap.pos - np.asarray(q, float)).T)
+    o = np.flatnonzero((d < radius_m) & (np.arange(snap.n) != row))
+    return snap.pos[o], snap.heading[o], snap.length[o], snap.width[o], snap.vel[o]
+
+
+def radar_obstacles(obs, known_pos, gate_m: float):
+    """All egos' returns in ``obs.detections`` as assumed boxes, minus those whose box centre lies
+    within ``gate_m`` of a ``known_pos`` (vehicles known otherwise, e.g. flock members over V2V;
+    no target ids used). Returns (corners (B,4,2), velocities (B,2), owner (B,) index into
+    ``obs.ego_ids``)."""
+    scans = obs.detections
+    row_of = {v: k for k, v in enumerate(obs.ego_ids)}
+    parts = [(perceived_boxes(d), np.array([row_of[d.ego_ids[e]] for e in d.ego], dtype=int)) for d in scans]
+    pos, hd, ln, wd, vel = (np.concatenate([b[i] for b, _ in parts]) for i in range(5))
+    owner = np.concatenate([o for _, o in parts])
+    if len(pos) and len(known_pos):
+        keep = ~near_any(pos, known_pos, gate_m)
+        pos, hd, ln, wd, vel, owner = pos[keep], hd[keep], ln[keep], wd[keep], vel[keep], owner[keep]
+    return footprint_corners(pos, hd, ln, wd), vel, owner

@@ -1,0 +1,83 @@
+"""The sensors a scenario chooses by name (``ego.sensor``): what the controllers and layers see.
+
+* ``truth``: the controllers read the whole snapshot (``Observation.detections is None``). When a
+  layer needs radar scans (the danger-time layer), a front radar scans all the same and its scans
+  go to the layers only (``Observation.scans``).
+* ``radar``: each ego's front radar (and a rear one with ``radar.rear``); controllers get the scans
+  plus the tracker's memory of returns out of view (one fused memory for both mounts), and the
+  traffic's direction at each ego (its route path's nearest segment), along which returns are
+  taken to move (:mod:`.perception`).
+
+Both hand flock members' V2V messages on (:mod:`.v2v`) when the controller needs them.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from sumo_avoid.core.polyline import route_directions, route_segments
+from sumo_avoid.core.snapshot import Snapshot
+from sumo_avoid.core.types import EgoTask, Observation
+from sumo_avoid.sensing.log import detections_table
+from sumo_avoid.sensing.radar import Radar
+
+
+class _Base:
+    def __init__(self, obstacles=(), v2v=None):
+        self.obstacles = tuple(obstacles)
+        self.v2v = v2v
+        self.radars: tuple[Radar, ...] = ()
+
+    def add_ego(self, task: EgoTask) -> None:
+        pass
+
+    def remove_ego(self, vid: str) -> None:
+        pass
+
+    def stats(self) -> dict:
+        return {}
+
+    def tables(self) -> dict:
+        log = [d for r in self.radars for d in r.log]
+        return {"detections": detections_table(log)} if log else {}
+
+    def _rows(self, snap: Snapshot, ego_ids) -> np.ndarray:
+        return np.array([snap.index[v] for v in ego_ids], dtype=int)
+
+
+class TruthSensor(_Base):
+    """Ground truth for the controllers (a front radar for the layers if they need one)."""
+
+    def __init__(self, radar: Radar | None = None, obstacles=(), v2v=None):
+        super().__init__(obstacles, v2v)
+        self.radar = radar
+        self.radars = (radar,) if radar is not None else ()
+
+    def observe(self, snap: Snapshot, ego_ids, ego_speed) -> Observation:
+        scans = (self.radar.scan(snap, ego_ids, self.obstacles),) if self.radar is not None else ()
+        return Observation(snap, tuple(ego_ids), self._rows(snap, ego_ids), ego_speed, self.obstacles, scans,
+                           v2v=self.v2v)
+
+
+class RadarSensor(_Base):
+    """Front radar (+ rear radar), tracker memory, route direction per ego."""
+
+    def __init__(self, front: Radar, rear: Radar | None = None, obstacles=(), v2v=None):
+        super().__init__(obstacles, v2v)
+        self.front, self.rear = front, rear
+        self.radars = (front,) if rear is None else (front, rear)
+        self._paths: dict[str, np.ndarray] = {}
+        self._seg_key, self._segs = None, None  # route_segments() of the egos in _seg_key
+
+    def add_ego(self, task: EgoTask) -> None:
+        self._paths[task.vid] = task.path
+
+    def observe(self, snap: Snapshot, ego_ids, ego_speed) -> Observation:
+        ids = tuple(ego_ids)
+        rows = self._rows(snap, ids)
+        scans = tuple(r.scan(snap, ids, self.obstacles) for r in self.radars)
+        if self._seg_key != ids:  # the padded route segments only change with the egos
+            self._seg_key, self._segs = ids, route_segments([self._paths.get(v) for v in ids])
+        along = route_directions(None, snap.pos[rows], snap.heading[rows], self._segs)
+        seen = self.front.objects(scans[0] if len(scans) == 1 else scans, along)
+        seen = seen if isinstance(seen, tuple) else (seen,)
+        return Observation(snap, ids, rows, ego_speed, self.obstacles, scans, seen, along, self.v2v)

@@ -1,0 +1,103 @@
+"""Short-term memory of radar returns (a minimal object list, as radar ECUs output).
+
+A forward radar loses a car as soon as it is beside the ego (outside the field of view), exactly
+when a lane change back would hit it. The tracker keeps each return for ``memory_s`` after it was
+last seen, coasting it at the velocity estimated from that return (:func:`.perception.velocity_estimate`:
+motion along the ego's heading that explains the radial speed) while it stays outside
+the field of view or beyond the range. A remembered return that should be visible now but is not
+matched by a new return within ``gate_m`` is dropped. No target ids are used.
+With a rear radar too, one memory serves both (see :meth:`Tracker.update`).
+Output: a :class:`~.radar.Detections` whose rows are the current returns followed by the coasted
+ones, range and azimuth recomputed from each ego's current sensor pose (azimuths may lie outside
+the field of view), so controllers read it exactly like a scan.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from sumo_avoid.sensing.perception import velocity_estimate
+from sumo_avoid.core.types import Detections
+from scipy.spatial import cKDTree
+
+
+_EGO_SEPARATION_M = 1e6  # egos' returns are kept apart in the search tree along a third axis
+
+
+def _near_same_ego(p, e, q, f, gate_m: float) -> np.ndarray:
+    """(len(p),) True where point p[i] of ego e[i] has a point q[j] of the same ego (f[j] == e[i])
+    within gate_m: one k-d tree over (x, y, ego * 1e6), so other egos' points are never near."""
+    tree = cKDTree(np.column_stack([q, f * _EGO_SEPARATION_M]))
+    d, _ = tree.query(np.column_stack([p, e * _EGO_SEPARATION_M]), k=1, distance_upper_bound=gate_m)
+    return d <= gate_m
+
+
+class Tracker:
+    def __init__(self, memory_s: float, fov_deg: float, max_range_m: float, gate_m: float = 3.0):
+        self.memory_s = memory_s
+        self.half = math.radians(fov_deg) / 2
+        self.max_range_m = max_range_m
+        self.gate_m = gate_m
+        self._ids: tuple[str, ...] = ()  # the egos of the last scan (index space of _e)
+        self._e = np.zeros(0, dtype=int)  # (M,) ego index (into _ids) of each remembered return
+        self._p = np.zeros((0, 2))  # world position when last seen, m
+        self._v = np.zeros((0, 2))  # estimated velocity, m/s
+        self._t = np.zeros(0)  # time last seen, s
+        self._scan_time = -math.inf
+
+    def update(self, det, along=None):
+        """Fold in a scan (a held scan changes nothing) and return current + coasted returns.
+
+        ``det`` is one :class:`Detections` or a tuple of them, one per radar mount of the same egos
+        (front first). With several mounts the memory is fused: a remembered return is dropped
+        when it should be visible to any of them, and re-observation by any of them replaces it;
+        the coasted returns are reported with the first (front) scan, the others as scanned.
+        """
+        scans = det if isinstance(det, tuple) else (det,)
+        ref = scans[0]
+        now = ref.time_s
+        if ref.ego_ids != self._ids:  # egos came or went: re-index the memory, forget the gone
+            ego_idx = {v: i for i, v in enumerate(ref.ego_ids)}
+            e = np.array([ego_idx.get(v, -1) for v in self._ids] + [-1], dtype=int)[self._e]
+            k = np.flatnonzero(e >= 0)
+            self._e, self._p, self._v, self._t = e[k], self._p[k], self._v[k], self._t[k]
+            self._ids = ref.ego_ids
+        if now > self._scan_time:
+            self._scan_time = now
+            p_new = np.concatenate([d.points() for d in scans])
+            # coasting velocity: motion along the traffic's direction at the ego if known (the route),
+            # else along the sensor's boresight
+            v_new = np.concatenate([velocity_estimate(d, along=None if along is None else np.asarray(along)[d.ego])
+                                    for d in scans])
+            e_new = np.concatenate([d.ego for d in scans])
+            keep = now - self._t <= self.memory_s
+            for d in scans:  # should be seen now by this radar: trust its scan
+                r, az, pred = self._polar(d, self._e, now)
+                keep &= ~((np.abs(az) <= self.half) & (r <= self.max_range_m))
+            k = np.flatnonzero(keep)
+            if len(k) and len(e_new):  # re-observed (a new return of the same ego within gate_m): replaced
+                keep[k[_near_same_ego(pred[k], self._e[k], p_new, e_new, self.gate_m)]] = False
+            k = np.flatnonzero(keep)
+            self._e = np.concatenate([e_new, self._e[k]])
+            self._p = np.concatenate([p_new, self._p[k]])
+            self._v = np.concatenate([v_new, self._v[k]])
+            self._t = np.concatenate([np.full(len(e_new), now), self._t[k]])
+        # the front scan's own rows and the coasted ones (the other mounts' current rows skipped)
+        n_cur = sum(d.n for d in scans)
+        rows = np.concatenate([np.arange(ref.n), np.arange(n_cur, len(self._e))]).astype(int)
+        e = self._e[rows]
+        r, az, _ = self._polar(ref, e, now, rows)
+        a = ref.sensor_heading[e] + az
+        u = np.column_stack([np.cos(a), np.sin(a)])
+        vr = np.einsum("ij,ij->i", self._v[rows] - ref.sensor_vel[e], u)
+        out = Detections(now, ref.ego_ids, ref.sensor_pos, ref.sensor_heading, ref.sensor_vel, e, r, az, vr,
+                         ref.target + ("",) * (len(rows) - ref.n), ref.mount)
+        return out if not isinstance(det, tuple) else (out,) + scans[1:]
+
+    def _polar(self, det, e, now, rows=slice(None)):
+        pred = self._p[rows] + self._v[rows] * (now - self._t[rows])[:, None]
+        rel = pred - det.sensor_pos[e] if len(e) else np.zeros((0, 2))
+        r = np.hypot(rel[:, 0], rel[:, 1])
+        az = (np.arctan2(rel[:, 1], rel[:, 0]) - det.sensor_heading[e] + np.pi) % (2 * np.pi) - np.pi
+        return r, az, pred

@@ -1,0 +1,250 @@
+"""``sumo-avoid report LEDGER_OR_RUN_DIR --out FILE.html``: a self-contained study report.
+
+The HTML file needs nothing else: images are PNGs embedded as base64 ``data:`` URIs, styles are
+inline, there are no scripts and no links to fetch. Sections: a controller x scenario table,
+per-scenario trajectory plots on the road geometry, box plots of each metric across seeds, time
+series of gap and speed for one chosen run, every run, and the failed runs with their errors.
+``--md`` / ``--csv`` export the summary table as Markdown and the runs table as CSV.
+
+The input is a ledger (``.sqlite``), a folder holding ``ledger.sqlite``, or a folder of run
+folders written by ``sumo-avoid run`` (each with ``metrics.json``), or one such run folder.
+"""
+from __future__ import annotations
+
+import base64
+import datetime
+import html
+import io
+import json
+import pathlib
+import types
+import pandas as pd
+from sumo_avoid.studies import ledger
+from sumo_avoid.plots.trajectories import _new_figure
+from sumo_avoid.plots.trajectories import plot_trajectories
+from sumo_avoid.sumo.road import Road
+from sumo_avoid.metrics.series import series
+from sumo_avoid.plots.trajectories import plot_timeseries
+import sys
+
+METRICS = ("collisions", "min_gap_m", "phi_coll", "phi_wall", "mean_speed_mps", "time_to_goal_s",
+           "path_length_m", "sumo_collisions")
+
+
+def load_runs(src) -> tuple:
+    """(runs DataFrame, base folder for the ``artifacts`` column)."""
+    src = pathlib.Path(src)
+    if src.is_dir() and (src / "ledger.sqlite").is_file():
+        src = src / "ledger.sqlite"
+    if src.is_file():
+        return ledger.read(src), src.resolve().parent
+    if not src.is_dir():
+        raise FileNotFoundError(f"{src}: neither a ledger file nor a folder")
+    dirs = [src] if (src / "metrics.json").is_file() else sorted(p.parent for p in src.glob("*/metrics.json"))
+    if not dirs:
+        raise FileNotFoundError(f"{src}: no ledger.sqlite and no run folders with metrics.json")
+    rows = []
+    for d in dirs:
+        m = json.loads((d / "metrics.json").read_text())
+        row = {"key": d.name, "status": "done", "error": None, "artifacts": str(d.resolve()), "net_file": None}
+        row.update(ledger.scalar_metrics(m))
+        row.update(scenario=m.get("scenario"), controller=m.get("controller"), seed=m.get("seed"))
+        rows.append(row)
+    return pd.DataFrame(rows), src.resolve()
+
+
+def summary(df):
+    """Controller x scenario table: runs, failures and aggregate metrics over done runs."""
+    rows = []
+    for (scn, ctl), g in df.groupby(["scenario", "controller"], sort=True, dropna=False):
+        d = g[g["status"] == "done"]
+
+        def agg(col, fn):
+            if col not in d or d[col].dropna().empty:
+                return None
+            return float(getattr(d[col].dropna().astype(float), fn)())
+
+        rows.append({"scenario": scn, "controller": ctl, "runs": len(g), "done": len(d), "failed": len(g) - len(d),
+                     "goal_reached_rate": agg("goal_reached", "mean"), "collisions_total": agg("collisions", "sum"),
+                     "min_gap_m_min": agg("min_gap_m", "min"), "phi_wall_max": agg("phi_wall", "max"),
+                     "phi_coll_mean": agg("phi_coll", "mean"), "mean_speed_mps_mean": agg("mean_speed_mps", "mean")})
+    return pd.DataFrame(rows)
+
+
+def _png(fig) -> str:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=90, bbox_inches="tight")
+    return base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def _png_file(path: pathlib.Path) -> str:
+    return base64.b64encode(path.read_bytes()).decode("ascii")
+
+
+def _img(b64: str, alt: str) -> str:
+    return f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{b64}">'
+
+
+def box_plots(df) -> str | None:
+    """One panel per metric: a box per scenario/controller over its done runs' seeds."""
+    d = df[df["status"] == "done"]
+    cols = [c for c in METRICS if c in d and d[c].notna().any()]
+    if not cols or d.empty:
+        return None
+    groups = list(d.groupby(["scenario", "controller"], sort=True))
+    n = len(cols)
+    ncol = min(3, n)
+    nrow = -(-n // ncol)
+    fig = _new_figure((5.0 * ncol, 3.2 * nrow))
+    for i, c in enumerate(cols):
+        ax = fig.add_subplot(nrow, ncol, i + 1)
+        data = [g[c].dropna().astype(float).to_numpy() for _, g in groups]
+        labels = [f"{s}\n{k}" for (s, k), _ in groups]
+        try:
+            ax.boxplot(data, tick_labels=labels, showmeans=True)
+        except TypeError:  # matplotlib < 3.9
+            ax.boxplot(data, labels=labels, showmeans=True)
+        ax.set_title(c, fontsize=10)
+        ax.tick_params(labelsize=7)
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return _png(fig)
+
+
+def _artifacts(row, base: pathlib.Path) -> pathlib.Path | None:
+    a = row.get("artifacts")
+    if not isinstance(a, str) or not a:
+        return None
+    p = pathlib.Path(a)
+    return p if p.is_absolute() else base / p
+
+
+def trajectory_png(row, base: pathlib.Path) -> str | None:
+    """The run's trajectory on the road: its trajectory.png, or drawn from trajectories.csv + net."""
+    d = _artifacts(row, base)
+    if d is None:
+        return None
+    if (d / "trajectory.png").is_file():
+        return _png_file(d / "trajectory.png")
+    net = row.get("net_file")
+    if not (d / "trajectories.csv").is_file() or not isinstance(net, str) or not pathlib.Path(net).is_file():
+        return None
+    out = d / "trajectory.png"
+    plot_trajectories(Road.from_net_file(net), pd.read_csv(d / "trajectories.csv"), out,
+                      title=f"{row['scenario']} · {row['controller']} · seed {row['seed']}")
+    return _png_file(out)
+
+
+def timeseries_png(row, base: pathlib.Path) -> str | None:
+    """Gap and speed over time for one run: its timeseries.png, or computed from trajectories.csv."""
+    d = _artifacts(row, base)
+    if d is None:
+        return None
+    if (d / "timeseries.png").is_file():
+        return _png_file(d / "timeseries.png")
+    if not (d / "trajectories.csv").is_file():
+        return None
+    out = d / "timeseries.png"
+    plot_timeseries(series(types.SimpleNamespace(traj=pd.read_csv(d / "trajectories.csv"))), out,
+                    title=f"{row['scenario']} · {row['controller']} · seed {row['seed']}")
+    return _png_file(out)
+
+
+def _fmt(v) -> str:
+    if v is None or (isinstance(v, float) and v != v):
+        return "n/a"
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return str(v)
+
+
+def _table_html(df, cols) -> str:
+    head = "".join(f"<th>{html.escape(c)}</th>" for c in cols)
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(_fmt(r[c]))}</td>" for c in cols) + "</tr>"
+                   for r in df.to_dict(orient="records"))
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def markdown(df, cols) -> str:
+    lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    lines += ["| " + " | ".join(_fmt(r[c]).replace("|", "\\|") for c in cols) + " |" for r in df.to_dict(orient="records")]
+    return "\n".join(lines) + "\n"
+
+
+CSS = ("body{font-family:sans-serif;margin:2em;max-width:1400px}table{border-collapse:collapse;margin:1em 0;"
+       "font-size:13px}td,th{border:1px solid #bbb;padding:3px 7px;text-align:right}th{background:#eee}"
+       "img{max-width:100%;border:1px solid #ddd;margin:.5em 0}.failed td{background:#fde}")
+
+
+def build_html(df, base: pathlib.Path, title: str, run_key: str | None = None) -> str:
+    summ = summary(df)
+    done = df[df["status"] == "done"].sort_values(["scenario", "controller", "seed", "key"])
+    failed = df[df["status"] != "done"]
+    parts = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
+             f"<style>{CSS}</style></head><body><h1>{html.escape(title)}</h1>",
+             f"<p>{len(df)} runs: {len(done)} done, {len(failed)} failed. Generated "
+             f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC by sumo-avoid report.</p>",
+             "<h2>Controller &times; scenario</h2>", f'<div id="summary">{_table_html(summ, list(summ.columns))}</div>']
+    parts.append("<h2>Trajectories on the road (one run per scenario and controller, lowest seed)</h2>")
+    for (scn, ctl), g in done.groupby(["scenario", "controller"], sort=True):
+        row = g.iloc[0].to_dict()
+        b64 = trajectory_png(row, base)
+        head = html.escape(f"{scn} · {ctl} · seed {row['seed']}")
+        parts.append(f"<h3>{head}</h3>"
+                     + (_img(b64, f"trajectory {scn} {ctl}") if b64 else "<p>(no trajectory recorded)</p>"))
+    bp = box_plots(df)
+    parts.append("<h2>Metric distributions across seeds</h2>" + (_img(bp, "box plots") if bp else "<p>no done runs</p>"))
+    if len(done):
+        chosen = done[done["key"].astype(str).str.startswith(run_key)] if run_key else done
+        if chosen.empty:
+            raise ValueError(f"--run {run_key}: no done run with a key starting so")
+        row = chosen.iloc[0].to_dict()
+        b64 = timeseries_png(row, base)
+        parts.append(f"<h2>Gap and speed over time: {html.escape(str(row['scenario']))} · "
+                     f"{html.escape(str(row['controller']))} · seed {row['seed']} ({html.escape(str(row['key'])[:16])})</h2>"
+                     + (_img(b64, "time series") if b64 else "<p>(no trajectory recorded)</p>"))
+    cols = ["key", "scenario", "controller", "seed", "status"] + [c for c in ("goal_reached", *METRICS) if c in df]
+    shown = df.sort_values(["scenario", "controller", "seed", "key"]).assign(key=lambda x: x["key"].astype(str).str[:16])
+    parts.append(f'<h2>Runs</h2><div id="runs">{_table_html(shown, cols)}</div>')
+    parts.append("<h2>Failed runs</h2>" + (f'<div id="failed" class="failed">'
+                                          f'{_table_html(failed, ["key", "scenario", "controller", "seed", "error"])}</div>'
+                                          if len(failed) else "<p>none</p>"))
+    parts.append("</body></html>\n")
+    return "\n".join(parts)
+
+
+def add_parser(sub) -> None:
+    r = sub.add_parser("report", help="self-contained HTML report of a ledger or of run folders")
+    r.add_argument("source", type=pathlib.Path, metavar="LEDGER_OR_RUN_DIR")
+    r.add_argument("--out", type=pathlib.Path, required=True, help="HTML file to write")
+    r.add_argument("--run", default=None, metavar="KEY", help="run (key prefix) for the time series (default: first)")
+    r.add_argument("--md", type=pathlib.Path, default=None, help="also write the summary table as Markdown")
+    r.add_argument("--csv", type=pathlib.Path, default=None, help="also write the runs table as CSV")
+    r.add_argument("--title", default=None)
+    r.set_defaults(func=cmd_report)
+
+
+def cmd_report(args) -> int:
+    try:
+        df, base = load_runs(args.source)
+    except FileNotFoundError as e:
+        print(f"sumo-avoid: error: {e}", file=sys.stderr)
+        return 2
+    try:
+        page = build_html(df, base, args.title or f"sumo-avoid study: {args.source}", args.run)
+    except ValueError as e:
+        print(f"sumo-avoid: error: {e}", file=sys.stderr)
+        return 2
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(page)
+    print(f"report -> {args.out} ({len(df)} runs)")
+    if args.md:
+        s = summary(df)
+        failed = df[df["status"] != "done"]
+        text = "## Controller x scenario\n\n" + markdown(s, list(s.columns))
+        if len(failed):
+            text += "\n## Failed runs\n\n" + markdown(failed, ["key", "scenario", "controller", "seed", "error"])
+        args.md.write_text(text)
+    if args.csv:
+        df.to_csv(args.csv, index=False)
+    return 0

@@ -1,0 +1,155 @@
+"""``sumo-avoid reproduce table4``: seed 000's Table 4 (SPEC §1.3) inside SUMO.
+
+Runs scenarios/arena_v{4,6,8}.toml (Table 3 presets) over K seeds, each run in its own process
+(libsumo allows one SUMO per process), and writes to DIR:
+
+* ``table4.csv``: ``v_flock, metric, ours_mean, ours_sd, paper_mean, paper_sd`` (one row per
+  speed and per row of SPEC §1.3; metric names as in metrics.json; ``mu_best`` = best seed);
+* ``table4.md``: the same side by side, with the exact command and settings;
+* ``fig7_v{4,6,8}.png``: trajectories in the arena for the first seed of each speed;
+* ``runs/v{V}_s{SEED}.json``: every run's metrics.
+"""
+from __future__ import annotations
+
+import json
+import multiprocessing
+import pathlib
+import sys
+import time
+
+import numpy as np
+
+from sumo_avoid.metrics import basic
+from sumo_avoid.metrics.flocking import FlockingOrder
+from sumo_avoid.plots.arena import plot_arena
+from sumo_avoid.rollout import runner
+from sumo_avoid.scenario import spec as scenario
+import pandas as pd
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+SPEEDS = (4, 6, 8)
+# SPEC §1.3, mean and sd over the seed's 100 evaluations; phi_coll in metrics.json units (not x1e-6)
+PAPER = {
+    "v_vel": {4: (3.78, 0.10), 6: (5.60, 0.02), 8: (7.26, 0.02)},
+    "mean_nn_dist_m": {4: (12.2, 0.4), 6: (13.4, 0.06), 8: (14.7, 0.07)},
+    "phi_coll": {4: (0.94e-6, 1.3e-6), 6: (1.6e-6, 1.9e-6), 8: (1.0e-6, 1.8e-6)},
+    "n_coll": {4: (1.18, 1.25), 6: (1.65, 1.34), 8: (0.89, 1.19)},
+    "mu_corr": {4: (0.916, 0.015), 6: (0.923, 0.003), 8: (0.904, 0.005)},
+    "mu_speed": {4: (0.938, 0.062), 6: (0.923, 0.006), 8: (0.857, 0.007)},
+    "mu": {4: (0.812, 0.101), 6: (0.776, 0.086), 8: (0.728, 0.075)},
+    "mu_best": {4: (0.918, None), 6: (0.873, None), 8: (0.798, None)},
+}
+EXTRA = ("phi_corr", "n_disc", "n_min", "phi_wall", "mu_disc", "mu_cluster", "mu_wall", "mu_coll", "collisions")
+
+
+def _job(job: dict) -> dict:
+    sets = [f"arena.n_agents={job['agents']}", f"sim.duration_s={job['duration']}", *job["sets"]]
+    scn = scenario.load(ROOT / "scenarios" / f"arena_v{job['v']}.toml", sets, seed=job["seed"])
+    t0 = time.perf_counter()
+    res = runner.run(scn)
+    # the flocking metric (min_gap and SUMO bookkeeping left out)
+    m = FlockingOrder().compute(res)
+    m["collisions"] = int(len(basic.collision_events(res.traj)))
+    m["wall_s"] = time.perf_counter() - t0
+    if job.get("figure"):
+        plot_arena(res, pathlib.Path(job["figure"]), f"v_flock = {job['v']} m/s · seed {job['seed']} · "
+                   f"N = {job['agents']} · {job['duration']:.0f} s · μ = {m['mu']:.3f}")
+    keep = {k: m.get(k) for k in (*PAPER, *EXTRA) if k in m}
+    keep.update(v=job["v"], seed=job["seed"], wall_s=m["wall_s"])
+    return keep
+
+
+def summarise(runs: list[dict]) -> list[dict]:
+    rows = []
+    for v in SPEEDS:
+        mine = [r for r in runs if r["v"] == v]
+        if not mine:
+            continue
+        for metric, paper in PAPER.items():
+            key = "mu" if metric == "mu_best" else metric
+            vals = np.array([r[key] for r in mine if r.get(key) is not None], float)
+            if metric == "mu_best":
+                mean, sd = (float(vals.max()) if vals.size else None), None
+            else:
+                mean = float(vals.mean()) if vals.size else None
+                sd = float(vals.std(ddof=1)) if vals.size > 1 else None
+            rows.append({"v_flock": v, "metric": metric, "ours_mean": mean, "ours_sd": sd,
+                         "paper_mean": paper[v][0], "paper_sd": paper[v][1]})
+    return rows
+
+
+def _fmt(x, metric):
+    if x is None:
+        return "–"
+    return f"{x * 1e6:.2f}e-6" if metric == "phi_coll" else f"{x:.3f}"
+
+
+def write_table(rows: list[dict], runs: list[dict], out: pathlib.Path, command: str, settings: str) -> None:
+    pd.DataFrame(rows, columns=["v_flock", "metric", "ours_mean", "ours_sd", "paper_mean", "paper_sd"]).to_csv(
+        out / "table4.csv", index=False)
+    lines = ["# Table 4 (seed 000) reproduced in SUMO", "", f"Command: `{command}`", "", settings, "",
+             "| v_flock | metric | ours mean ± sd | paper mean ± sd | within paper ±1 sd |", "|---|---|---|---|---|"]
+    for r in rows:
+        ok = ""
+        if r["ours_mean"] is not None and r["paper_sd"] is not None:
+            ok = "yes" if abs(r["ours_mean"] - r["paper_mean"]) <= r["paper_sd"] else "no"
+        lines.append(f"| {r['v_flock']} | {r['metric']} | {_fmt(r['ours_mean'], r['metric'])} ± "
+                     f"{_fmt(r['ours_sd'], r['metric'])} | {_fmt(r['paper_mean'], r['metric'])} ± "
+                     f"{_fmt(r['paper_sd'], r['metric'])} | {ok} |")
+    lines += ["", "Other order parameters (ours, mean over seeds):", "",
+              "| v_flock | " + " | ".join(EXTRA) + " | wall s/run |", "|---" * (len(EXTRA) + 2) + "|"]
+    for v in SPEEDS:
+        mine = [r for r in runs if r["v"] == v]
+        if mine:
+            vals = [np.mean([r[k] for r in mine if r.get(k) is not None] or [np.nan]) for k in EXTRA]
+            lines.append(f"| {v} | " + " | ".join(f"{x:.4g}" for x in vals)
+                         + f" | {np.mean([r['wall_s'] for r in mine]):.1f} |")
+    (out / "table4.md").write_text("\n".join(lines) + "\n")
+
+
+def reproduce_table4(seeds: int = 20, agents: int = 100, duration: float = 600.0, out=None, jobs: int | None = None,
+                     sets=(), first_seed: int = 1) -> list[dict]:
+    out = pathlib.Path(out) if out else ROOT / "reports" / "table4"
+    (out / "runs").mkdir(parents=True, exist_ok=True)
+    job_list = [{"v": v, "seed": s, "agents": agents, "duration": float(duration), "sets": list(sets),
+                 "figure": str(out / f"fig7_v{v}.png") if s == first_seed else None}
+                for v in SPEEDS for s in range(first_seed, first_seed + seeds)]
+    jobs = jobs or min(len(job_list), multiprocessing.cpu_count())
+    ctx = multiprocessing.get_context("spawn")
+    runs = []
+    with ctx.Pool(jobs, maxtasksperchild=1) as pool:
+        for r in pool.imap_unordered(_job, job_list):
+            runs.append(r)
+            (out / "runs" / f"v{r['v']}_s{r['seed']}.json").write_text(json.dumps(r, indent=1, sort_keys=True))
+            print(f"  v_flock {r['v']} seed {r['seed']}: mu {r['mu']:.3f} v_vel {r['v_vel']:.2f} "
+                  f"({len(runs)}/{len(job_list)}, {r['wall_s']:.0f} s)", flush=True)
+    runs.sort(key=lambda r: (r["v"], r["seed"]))
+    rows = summarise(runs)
+    command = "sumo-avoid reproduce table4 " + " ".join(sys.argv[3:]) if len(sys.argv) > 2 else "reproduce_table4()"
+    settings = (f"Settings: {seeds} seeds ({first_seed}..{first_seed + seeds - 1}), N = {agents}, {duration:.0f} s, "
+                f"scenarios/arena_v{{4,6,8}}.toml" + (f", overrides {list(sets)}" if sets else ""))
+    write_table(rows, runs, out, command, settings)
+    return rows
+
+
+def add_parser(sub) -> None:
+    r = sub.add_parser("reproduce", help="reproduce a table of a seed paper inside SUMO (table4: flocking)")
+    r.add_argument("what", choices=["table4"])
+    r.add_argument("--seeds", type=int, default=20, help="seeds per speed (default 20)")
+    r.add_argument("--first-seed", type=int, default=1)
+    r.add_argument("--agents", type=int, default=100, help="flock size N (default 100)")
+    r.add_argument("--duration", type=float, default=600.0, help="run time, s (default 600)")
+    r.add_argument("--jobs", type=int, default=None, help="parallel processes (default: CPU count)")
+    r.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scenario value in all runs, e.g. controllers.flocking.speed_rule=cutoff")
+    r.add_argument("--out", type=pathlib.Path, default=None, help="output folder (default reports/table4)")
+    r.set_defaults(func=_cmd)
+
+
+def _cmd(args) -> int:
+    rows = reproduce_table4(args.seeds, args.agents, args.duration, args.out, args.jobs, args.overrides,
+                            args.first_seed)
+    for r in rows:
+        if r["metric"] in ("mu", "v_vel"):
+            print(f"v_flock {r['v_flock']} {r['metric']}: ours {r['ours_mean']:.3f} paper {r['paper_mean']:.3f}")
+    return 0

@@ -1,0 +1,244 @@
+"""``sumo-avoid suite SUITE.toml``: gate controllers on a scenario suite (pass/fail table, JUnit XML).
+
+A suite file has ``[[entry]]`` tables: ``name``, ``scenario`` (path relative to the suite file),
+``controller``, ``seeds`` (``"1-5"`` or a list), optional ``set`` (KEY=VALUE overrides) and
+``criteria``, a list of one-comparison strings in a tiny language that is parsed, never eval'd::
+
+    METRIC OP VALUE          # must hold on every seed, e.g.  collisions == 0,  phi_wall <= 0.1
+    METRIC_rate OP VALUE     # share of seeds where the (true/false) metric is true: goal_reached_rate >= 0.9
+    METRIC_mean|_min|_max OP VALUE   # aggregate over seeds: min_gap_m_min >= 0.5
+
+OP is one of ``== != <= >= < >``; VALUE a number or ``true``/``false``. A missing metric, a metric
+without a value (n/a) and a failed run all fail the entry. ``[defaults]`` may give ``seeds`` and
+``set`` for every entry.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import operator
+import pathlib
+import re
+import tempfile
+import xml.etree.ElementTree as ET
+
+from sumo_avoid.core.config import ScenarioError, check_table
+from sumo_avoid.studies.batch import parse_seeds
+from sumo_avoid.scenario.spec import read_toml
+import os
+from sumo_avoid.studies import batch, ledger
+
+OPS = {"==": operator.eq, "!=": operator.ne, "<=": operator.le, ">=": operator.ge, "<": operator.lt, ">": operator.gt}
+AGGREGATES = ("rate", "mean", "min", "max")
+_CRIT = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\s*(==|!=|<=|>=|<|>)\s*"
+                   r"(true|false|[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*$")
+
+
+@dataclasses.dataclass(frozen=True)
+class Criterion:
+    text: str
+    metric: str
+    op: str
+    value: float
+
+    @classmethod
+    def parse(cls, text: str, file: str = "<criteria>", key: str = "criteria") -> "Criterion":
+        m = _CRIT.match(text) if isinstance(text, str) else None
+        if not m:
+            raise ScenarioError(file, key, "a criterion like 'collisions == 0' or 'goal_reached_rate >= 0.9' "
+                                "(METRIC OP NUMBER, OP one of == != <= >= < >)", text)
+        raw = m.group(3)
+        value = {"true": 1.0, "false": 0.0}.get(raw)
+        return cls(text.strip(), m.group(1), m.group(2), float(raw) if value is None else value)
+
+    def check(self, rows: list[dict]) -> tuple[bool, str]:
+        """Evaluate on the done runs' metric rows. Returns (passed, one-line observation)."""
+        if not rows:
+            return False, "no finished runs"
+        name, agg = self.metric, None
+        if name not in rows[0]:
+            base, _, suffix = name.rpartition("_")
+            if suffix in AGGREGATES and base in rows[0]:
+                name, agg = base, suffix
+            else:
+                return False, f"no metric '{self.metric}'"
+        vals = [_num(r.get(name)) for r in rows]
+        seeds = [r.get("seed") for r in rows]
+        op = OPS[self.op]
+        if agg is None:
+            bad = [(s, v) for s, v in zip(seeds, vals) if v is None or not op(v, self.value)]
+            if not bad:
+                return True, f"ok on {len(rows)}/{len(rows)} seeds"
+            shown = ", ".join(f"seed {s}: {'n/a' if v is None else f'{v:g}'}" for s, v in bad[:5])
+            return False, f"fails on {len(bad)}/{len(rows)} seeds ({shown}{', ...' if len(bad) > 5 else ''})"
+        if any(v is None for v in vals):
+            return False, f"{name} is n/a on some seeds"
+        if agg == "rate":
+            x = sum(1.0 for v in vals if v) / len(vals)
+        elif agg == "mean":
+            x = sum(vals) / len(vals)
+        else:
+            x = (min if agg == "min" else max)(vals)
+        return bool(op(x, self.value)), f"{name} {agg} = {x:.4g} over {len(vals)} seeds"
+
+
+def _num(v):
+    if v is None or isinstance(v, str):
+        return None
+    v = float(v)
+    return None if math.isnan(v) else v
+
+
+@dataclasses.dataclass(frozen=True)
+class Entry:
+    name: str
+    scenario: pathlib.Path
+    controller: str | None
+    seeds: tuple[int, ...]
+    overrides: tuple[str, ...]
+    criteria: tuple[Criterion, ...]
+
+
+def load(path, seeds_override=None, extra_sets=()) -> list[Entry]:
+    """Read and validate a suite file (raises ScenarioError)."""
+    path = pathlib.Path(path)
+    file = str(path)
+    data = read_toml(path)
+    for k in data:
+        if k not in ("defaults", "entry"):
+            raise ScenarioError(file, k, "one of the known keys ['defaults', 'entry']", show_got=False)
+    defaults = data.get("defaults", {})
+    if not isinstance(defaults, dict) or set(defaults) - {"seeds", "set"}:
+        raise ScenarioError(file, "defaults", "a table with only 'seeds' and 'set'", show_got=False)
+    entries = data.get("entry")
+    if not isinstance(entries, list) or not entries:
+        raise ScenarioError(file, "entry", "at least one [[entry]] table", show_got=False)
+    out, names = [], set()
+    allowed = {"name", "scenario", "controller", "seeds", "set", "criteria"}
+    for i, e in enumerate(entries):
+        where = f"entry[{i}]"
+        check_table(file, where, e, allowed)
+        for k in ("name", "scenario"):
+            if not isinstance(e.get(k), str) or not e[k]:
+                raise ScenarioError(file, f"{where}.{k}", "a non-empty string", e.get(k))
+        if e["name"] in names:
+            raise ScenarioError(file, f"{where}.name", "a name not used by another entry", e["name"])
+        names.add(e["name"])
+        ctl = e.get("controller")
+        if ctl is not None and not isinstance(ctl, str):
+            raise ScenarioError(file, f"{where}.controller", "a controller name", ctl)
+        raw_seeds = seeds_override if seeds_override is not None else e.get("seeds", defaults.get("seeds"))
+        if raw_seeds is None:
+            raise ScenarioError(file, f"{where}.seeds", "seeds like \"1-5\" (here or in [defaults])", show_got=False)
+        seeds = parse_seeds(raw_seeds, file, f"{where}.seeds")
+        sets = list(defaults.get("set", [])) + list(e.get("set", [])) + list(extra_sets)
+        if not all(isinstance(s, str) for s in sets):
+            raise ScenarioError(file, f"{where}.set", "a list of KEY=VALUE strings", sets)
+        crits = e.get("criteria")
+        if not isinstance(crits, list) or not crits:
+            raise ScenarioError(file, f"{where}.criteria", "a non-empty list of criteria strings", crits)
+        parsed = tuple(Criterion.parse(c, file, f"{where}.criteria[{j}]") for j, c in enumerate(crits))
+        out.append(Entry(e["name"], path.resolve().parent / e["scenario"], ctl, seeds, tuple(sets), parsed))
+    return out
+
+
+@dataclasses.dataclass(frozen=True)
+class EntryResult:
+    entry: Entry
+    passed: bool
+    lines: tuple[tuple[str, bool, str], ...]  # (criterion or "runs", passed, observation)
+    time_s: float
+
+
+def evaluate(entries: list[Entry], runs_by_entry: dict[str, list], df) -> list[EntryResult]:
+    """Check every entry's criteria on its runs' ledger rows."""
+    out = []
+    for e in entries:
+        keys = [s.key for s in runs_by_entry[e.name]]
+        sub = df[df["key"].isin(keys)]
+        rows = sub.to_dict(orient="records")
+        done = [r for r in rows if r["status"] == "done"]
+        failed = [r for r in rows if r["status"] != "done"]
+        lines = []
+        if failed or len(rows) != len(keys):
+            errs = "; ".join(f"seed {r['seed']}: {r['error']}" for r in failed[:3])
+            lines.append(("runs", False, f"{len(failed)} of {len(keys)} runs failed ({errs})"))
+        for c in e.criteria:
+            ok, obs = c.check(done)
+            lines.append((c.text, ok, obs))
+        wall = float(sub["wall_s"].fillna(0).sum()) if len(sub) else 0.0
+        out.append(EntryResult(e, all(ok for _, ok, _ in lines), tuple(lines), wall))
+    return out
+
+
+def table(results: list[EntryResult]) -> str:
+    w = max([len(r.entry.name) for r in results] + [5])
+    c = max([len(t) for r in results for t, _, _ in r.lines] + [9])
+    lines = [f"{'entry':<{w}}  {'criterion':<{c}}  result  observed", "-" * (w + c + 28)]
+    for r in results:
+        for i, (text, ok, obs) in enumerate(r.lines):
+            lines.append(f"{r.entry.name if i == 0 else '':<{w}}  {text:<{c}}  {'pass' if ok else 'FAIL':<6}  {obs}")
+    n_fail = sum(not r.passed for r in results)
+    lines.append(f"{len(results) - n_fail} of {len(results)} entries passed" + (f", {n_fail} FAILED" if n_fail else ""))
+    return "\n".join(lines)
+
+
+def junit_xml(results: list[EntryResult], suite_name: str) -> str:
+    """JUnit XML: one <testcase> per entry, a <failure> naming what failed."""
+    root = ET.Element("testsuites")
+    ts = ET.SubElement(root, "testsuite", name=suite_name, tests=str(len(results)),
+                       failures=str(sum(not r.passed for r in results)), errors="0",
+                       time=f"{sum(r.time_s for r in results):.3f}")
+    for r in results:
+        tc = ET.SubElement(ts, "testcase", classname=f"sumo_avoid.studies.suite.{suite_name}", name=r.entry.name,
+                           time=f"{r.time_s:.3f}")
+        bad = [(t, o) for t, ok, o in r.lines if not ok]
+        if bad:
+            f = ET.SubElement(tc, "failure", message=f"{r.entry.name}: {bad[0][0]}: {bad[0][1]}", type="criterion")
+            f.text = "\n".join(f"{t}: {o}" for t, o in bad)
+        ET.SubElement(tc, "system-out").text = "\n".join(f"{'pass' if ok else 'FAIL'} {t}: {o}"
+                                                        for t, ok, o in r.lines)
+    ET.indent(root)
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def add_parser(sub) -> None:
+    s = sub.add_parser("suite", help="run a scenario suite, check its criteria, write JUnit XML")
+    s.add_argument("suite", type=pathlib.Path)
+    s.add_argument("--junit", type=pathlib.Path, default=None, help="write JUnit XML here")
+    s.add_argument("--seeds", default=None, help="use these seeds for every entry (e.g. 1-2 for a quick CI run)")
+    s.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="extra override for every entry (e.g. sim.duration_s=30)")
+    s.add_argument("--ledger", type=pathlib.Path, default=None,
+                   help="keep the runs in this ledger (default: a fresh temporary one, so results reflect the code now)")
+    s.add_argument("--workers", type=int, default=None, help="parallel runs (default: number of cores)")
+    s.add_argument("--scheduler", default=None, metavar="ADDRESS", help="run on a Dask cluster")
+    s.add_argument("--timeout", type=float, default=600.0, help="per-run timeout, s")
+    s.add_argument("--quiet", action="store_true", help="no progress bar")
+    s.set_defaults(func=cmd_suite)
+
+
+def cmd_suite(args) -> int:
+    entries = load(args.suite, args.seeds, args.overrides)
+    if args.workers is not None and args.workers < 1:
+        raise ScenarioError("<command line>", "--workers", "a positive integer", args.workers)
+    runs_by_entry, all_runs, seen = {}, [], set()
+    for e in entries:
+        runs_by_entry[e.name] = batch.expand([e.scenario], e.seeds, e.overrides, [e.controller])
+        for s in runs_by_entry[e.name]:
+            if s.key not in seen:
+                seen.add(s.key)
+                all_runs.append(s)
+    with tempfile.TemporaryDirectory(prefix="sumo-avoid-suite-") as tmp:
+        led = args.ledger or pathlib.Path(tmp) / "ledger.sqlite"
+        cfg = batch.BatchConfig(tuple(all_runs), led, workers=args.workers or os.cpu_count() or 1,
+                                timeout_s=args.timeout, scheduler=args.scheduler)
+        print(f"suite {args.suite}: {len(entries)} entries, {len(all_runs)} runs", flush=True)
+        batch.run_batch(cfg, progress=False if args.quiet else None)
+        results = evaluate(entries, runs_by_entry, ledger.read(led))
+    print(table(results))
+    if args.junit:
+        args.junit.parent.mkdir(parents=True, exist_ok=True)
+        args.junit.write_text(junit_xml(results, args.suite.stem))
+        print(f"JUnit XML -> {args.junit}")
+    return 0 if all(r.passed for r in results) else 1

@@ -1,0 +1,212 @@
+"""The one module that talks to libsumo.
+
+:class:`SumoSim` starts SUMO for a scenario, reads the world once per step into an immutable
+:class:`~sumo_avoid.core.snapshot.Snapshot` (through subscriptions, not per-vehicle getters), applies
+the actuator's poses to the egos with ``moveToXY`` and advances the simulation.
+
+SUMO runs with a fixed seed, ``--collision.check-junctions``, collisions reported but not acted on
+(``--collision.action warn``, ``--collision.mingap-factor 0`` = physical contact only), no
+teleporting, and the sublane model. Egos run with SUMO's safety checks off (speed mode 32,
+lane-change mode 0), so a controller's mistakes are not hidden; other vehicles keep SUMO's models.
+"""
+from __future__ import annotations
+
+import itertools
+import math
+import pathlib
+from dataclasses import dataclass
+
+import libsumo
+import numpy as np
+
+from sumo_avoid.core.snapshot import Snapshot
+
+_DYNAMIC = (libsumo.constants.VAR_POSITION, libsumo.constants.VAR_ANGLE, libsumo.constants.VAR_SPEED)
+_SIM_VARS = (libsumo.constants.VAR_DEPARTED_VEHICLES_IDS, libsumo.constants.VAR_ARRIVED_VEHICLES_IDS)
+EGO_SPEED_MODE = 32  # all of SUMO's speed safety checks off (verified: a commanded crash happens)
+EGO_LANE_CHANGE_MODE = 0  # SUMO changes no lanes for the ego: the plug-in is in charge
+
+
+@dataclass(frozen=True)
+class SumoCollision:
+    time_s: float
+    collider: str
+    victim: str
+    kind: str
+    lane: str
+
+
+@dataclass(frozen=True)
+class EgoInfo:
+    """What the plug-in learns about an ego when it takes it over."""
+
+    vid: str
+    route_edges: tuple[str, ...]
+    lane_index: int
+
+
+def sumo_args(net: pathlib.Path, routes, additional, step_s: float, seed: int, lateral_resolution_m: float,
+              log_file: pathlib.Path | None, sumo_collisions: bool = True) -> list[str]:
+    """SUMO's command line. ``sumo_collisions=False`` turns SUMO's own (lane-based) collision check
+    off: for a flock moved off-lane anywhere in an arena it reports tens of thousands of spurious
+    contacts per run (measured); the plug-in's footprint check is the reference there."""
+    args = ["sumo", "-n", str(net), "--step-length", repr(step_s), "--seed", str(seed),
+            "--collision.action", "warn" if sumo_collisions else "none",
+            "--collision.check-junctions", "true" if sumo_collisions else "false",
+            "--collision.mingap-factor", "0", "--lateral-resolution", repr(lateral_resolution_m),
+            "--time-to-teleport", "-1", "--no-step-log", "true", "--duration-log.disable", "true"]
+    if routes:
+        args += ["-r", ",".join(str(r) for r in routes)]
+    if additional:
+        args += ["-a", ",".join(str(a) for a in additional)]
+    if log_file is not None:
+        args += ["--log", str(log_file)]
+    else:
+        args += ["--no-warnings", "true"]
+    return args
+
+
+class SumoStartError(RuntimeError):
+    """SUMO refused to load the network, routes or additional files."""
+
+
+class SumoSim:
+    """One running SUMO (libsumo allows one per process: parallel runs need processes)."""
+
+    def __init__(self, args: list[str]):
+        if libsumo.isLoaded():
+            raise RuntimeError("a libsumo simulation is already running in this process")
+        try:
+            libsumo.start(args)
+        except Exception as e:  # libsumo raises TraCIException / FatalTraCIError on bad input
+            if libsumo.isLoaded():
+                libsumo.close()
+            raise SumoStartError(" ".join(str(e).split())) from None
+        self.step_s = libsumo.simulation.getDeltaT()
+        libsumo.simulation.subscribe(list(_SIM_VARS))
+        self._dims: dict[str, tuple[float, float]] = {}  # id -> (length, width), static
+        self._egos: set[str] = set()
+        self._static_key: tuple[str, ...] | None = None  # read(): libsumo's ids the cached static part is for
+        self._static: tuple = ()
+        self._subscribe_new(libsumo.vehicle.getIDList())
+
+    # --- reading ---------------------------------------------------------------------------
+    def _subscribe_new(self, ids) -> None:
+        for vid in ids:
+            if vid not in self._dims:
+                libsumo.vehicle.subscribe(vid, list(_DYNAMIC))
+                self._dims[vid] = (libsumo.vehicle.getLength(vid), libsumo.vehicle.getWidth(vid))
+
+    def read(self) -> Snapshot:
+        """The world now, as an immutable snapshot (centres, math headings)."""
+        res = libsumo.vehicle.getAllSubscriptionResults()
+        key = tuple(res)
+        if key != self._static_key:  # ids, lengths, widths, ego flags, rows only change with the vehicle set
+            dims_of = self._dims
+            ids = tuple(v for v in key if v in dims_of)  # libsumo keeps a previous run's results until a step
+            self._static_key = key
+            self._static = (ids, np.array([dims_of[v] for v in ids], dtype=float).reshape(-1, 2),
+                            np.array([v in self._egos for v in ids], dtype=bool))
+        ids, dims, is_ego = self._static
+        n = len(ids)
+        if n == 0:
+            return Snapshot.empty(self.time_s)
+        rows = res.values() if n == len(key) else [res[v] for v in ids]
+        c = libsumo.constants
+        P, A, S = c.VAR_POSITION, c.VAR_ANGLE, c.VAR_SPEED
+        flat = np.fromiter(itertools.chain.from_iterable((*r[P], r[A], r[S]) for r in rows), float, 4 * n)
+        flat = flat.reshape(n, 4)  # front bumper x, y, compass angle (deg), speed
+        heading = np.radians(90.0 - flat[:, 2])
+        direction = np.column_stack([np.cos(heading), np.sin(heading)])
+        centre = flat[:, :2] - direction * (dims[:, :1] / 2.0)
+        return Snapshot(self.time_s, ids, centre, direction * flat[:, 3:4], heading,
+                        dims[:, 0], dims[:, 1], is_ego)
+
+    @property
+    def time_s(self) -> float:
+        return libsumo.simulation.getTime()
+
+    def departed(self) -> tuple[str, ...]:
+        return tuple(libsumo.simulation.getSubscriptionResults()[libsumo.constants.VAR_DEPARTED_VEHICLES_IDS])
+
+    def pending(self) -> int:
+        """Vehicles loaded but not yet in the network, plus those in it."""
+        return libsumo.simulation.getMinExpectedNumber()
+
+    # --- egos ------------------------------------------------------------------------------
+    def take_over(self, vid: str) -> EgoInfo:
+        libsumo.vehicle.setSpeedMode(vid, EGO_SPEED_MODE)
+        libsumo.vehicle.setLaneChangeMode(vid, EGO_LANE_CHANGE_MODE)
+        self._egos.add(vid)
+        self._static_key = None
+        return EgoInfo(vid, tuple(libsumo.vehicle.getRoute(vid)), libsumo.vehicle.getLaneIndex(vid))
+
+    def apply(self, ids, centre: np.ndarray, heading: np.ndarray, speed: np.ndarray) -> None:
+        """Place each ego exactly (off-lane allowed, also inside junctions): moveToXY keepRoute=2."""
+        if len(ids) == 0:
+            return
+        heading = np.asarray(heading, float)
+        half = 0.5 * np.array([self._dims[v][0] for v in ids])
+        fx = (np.asarray(centre[:, 0], float) + half * np.cos(heading)).tolist()
+        fy = (np.asarray(centre[:, 1], float) + half * np.sin(heading)).tolist()
+        angle = (90.0 - np.degrees(heading)).tolist()
+        move, prev = libsumo.vehicle.moveToXY, libsumo.vehicle.setPreviousSpeed
+        for vid, x, y, a, v in zip(ids, fx, fy, angle, np.asarray(speed, float).tolist()):
+            move(vid, "", -1, x, y, angle=a, keepRoute=2)
+            prev(vid, v)
+
+    def release(self, vid: str) -> None:
+        """Take a finished ego out of the simulation."""
+        if vid in self._egos:
+            self._egos.discard(vid)
+            self._static_key = None
+        if vid in self._dims and vid in libsumo.vehicle.getIDList():
+            libsumo.vehicle.remove(vid)
+
+    # --- stepping --------------------------------------------------------------------------
+    def step(self) -> list[SumoCollision]:
+        libsumo.simulationStep()
+        arrived = libsumo.simulation.getSubscriptionResults()[libsumo.constants.VAR_ARRIVED_VEHICLES_IDS]
+        for vid in arrived:
+            self._dims.pop(vid, None)
+            self._egos.discard(vid)
+            self._static_key = None
+        self._subscribe_new(self.departed())
+        t = self.time_s
+        return [SumoCollision(t, c.collider, c.victim, c.type, c.lane) for c in libsumo.simulation.getCollisions()]
+
+    def add_free_vehicles(self, ids, centre: np.ndarray, heading: np.ndarray, speed: float,
+                          length_m: float, width_m: float, type_id: str = "flock") -> None:
+        """Add vehicles placed at exact centres/headings, off-lane (the arena's flock). They are
+        inserted by SUMO at the next step and then reported by :meth:`departed` like route vehicles."""
+        if type_id not in libsumo.vehicletype.getIDList():
+            libsumo.vehicletype.copy("DEFAULT_VEHTYPE", type_id)
+            libsumo.vehicletype.setLength(type_id, float(length_m))
+            libsumo.vehicletype.setWidth(type_id, float(width_m))
+            libsumo.vehicletype.setMaxSpeed(type_id, 50.0)
+            libsumo.vehicletype.setMinGap(type_id, 0.0)
+        edge = next(e for e in libsumo.edge.getIDList() if not e.startswith(":"))
+        route_id = f"__{type_id}_route"
+        if route_id not in libsumo.route.getIDList():
+            libsumo.route.add(route_id, [edge])
+        for k, vid in enumerate(ids):
+            libsumo.vehicle.add(vid, route_id, typeID=type_id, depart="now", departSpeed=repr(float(speed)))
+            libsumo.vehicle.setSpeedMode(vid, EGO_SPEED_MODE)
+            libsumo.vehicle.setLaneChangeMode(vid, EGO_LANE_CHANGE_MODE)
+            h = float(heading[k])
+            fx = float(centre[k, 0]) + 0.5 * length_m * math.cos(h)
+            fy = float(centre[k, 1]) + 0.5 * length_m * math.sin(h)
+            libsumo.vehicle.moveToXY(vid, "", -1, fx, fy, angle=90.0 - math.degrees(h), keepRoute=2)
+
+    def add_polygon(self, pid: str, shape: np.ndarray, color=(60, 60, 60, 255)) -> None:
+        libsumo.polygon.add(pid, [tuple(map(float, p)) for p in shape], color, fill=True, layer=5)
+
+    def close(self) -> None:
+        if libsumo.isLoaded():
+            libsumo.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
