@@ -62,7 +62,7 @@ def test_overtaking_with_a_rear_radar_too():
     res = runner.run(scn)
     m = evaluate.run_metrics(res)
     assert m["goal_reached"] and m["collisions"] == 0
-    assert {d.mount for d in res.radar_log} == {"front", "rear"}
+    assert set(res.tables["detections"]["mount"]) == {"front", "rear"}
 
 
 def test_cut_in_with_layer_no_collision():
