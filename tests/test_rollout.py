@@ -191,3 +191,20 @@ def test_the_example_controller_in_the_docs_runs_through_the_loop():
     egos = EgoBook({"e"}, StraightRoad(), goal_tolerance_m=5.0, cruise_speed_mps=10.0)
     rollout(sim, stack, egos, Recorder(), n_steps=1000)
     assert egos.finished == {"e"} and ctl.direction == {}
+
+
+@pytest.mark.sumo
+def test_output_metrics_adds_to_the_standard_set():
+    """``output.metrics`` names metrics beside the standard ones (which the summary, plots, ledger
+    and suites read): a subset removes nothing, and flocking's order parameters can be asked for a
+    car controller (with [controllers.flocking]'s v_flock and r_c)."""
+    from sumo_avoid.outputs import run_metrics
+    from sumo_avoid.rollout import runner
+    from sumo_avoid.rollout.assemble import metric_names
+    from sumo_avoid.scenario import spec as scenario
+
+    scn = scenario.load(SCENARIOS / "crash_straight.toml", ['output.metrics=["run", "flocking"]'])
+    assert metric_names(scn) == ("run", "collisions", "min_gap", "phi_coll", "phi_wall", "plugin_stats", "motion",
+                                 "flocking")
+    m = run_metrics(runner.run(scn))
+    assert {"goal_reached", "collisions", "min_gap_m", "mu", "v_vel"} <= set(m)

@@ -14,10 +14,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from sumo_avoid.actuation.held import HeldSpeed
 from sumo_avoid.actuation.params import ActuatorConfig
 from sumo_avoid.core.geometry import wrap_angle
 from sumo_avoid.core.snapshot import Snapshot
-from sumo_avoid.core.types import EgoTask, Motion, Observation
+from sumo_avoid.core.types import Motion, Observation
 
 _REVERSE_ANGLE = np.radians(90.0)
 
@@ -64,29 +65,15 @@ def actuate(pos, heading, speed, v_des, limits: ActuatorConfig, dt_s: float) -> 
     return Motion(new_pos, new_heading, new_speed)
 
 
-class KinematicActuator:
-    """The kinematic car above (``actuator.mode = "kinematic"``); holds each ego's signed speed
-    (SUMO cannot report a reversing speed)."""
+class KinematicActuator(HeldSpeed):
+    """The kinematic car above (``actuator.mode = "kinematic"``)."""
 
     def __init__(self, limits: ActuatorConfig, dt_s: float):
+        super().__init__()
         self.p, self.dt = limits, dt_s
-        self._speed: dict[str, float] = {}  # ego id -> signed speed (NaN: not moved yet), m/s
-
-    def add_ego(self, task: EgoTask) -> None:
-        self._speed[task.vid] = np.nan
-
-    def remove_ego(self, vid: str) -> None:
-        self._speed.pop(vid, None)
-
-    def stats(self) -> dict:
-        return {}
 
     def held(self, snap: Snapshot) -> Snapshot:
         return snap
-
-    def speeds(self, snap: Snapshot, ego_ids) -> np.ndarray:
-        held = np.array([self._speed[v] for v in ego_ids])
-        return np.where(np.isnan(held), snap.speed[[snap.index[v] for v in ego_ids]], held)
 
     def step(self, obs: Observation, command: np.ndarray) -> Motion:
         snap, rows = obs.snapshot, obs.ego_rows

@@ -10,10 +10,11 @@ from dataclasses import replace
 
 import numpy as np
 
+from sumo_avoid.actuation.held import HeldSpeed
 from sumo_avoid.actuation.params import ActuatorConfig
 from sumo_avoid.core.noise import velocity_kick
 from sumo_avoid.core.snapshot import Snapshot
-from sumo_avoid.core.types import EgoTask, Motion, Observation
+from sumo_avoid.core.types import Motion, Observation
 
 
 def relax(vel, v_des, tau_s: float, max_accel_mps2: float, dt_s: float):
@@ -42,23 +43,17 @@ def relaxation_step(pos, vel, heading, v_des, tau_s, max_accel_mps2, dt_s, kick=
     return np.asarray(pos, float) + new_vel * dt_s, new_vel, head, speed
 
 
-class RelaxationActuator:
+class RelaxationActuator(HeldSpeed):
     """Velocity relaxation (``actuator.mode = "relaxation"``); outer noise from its own stream."""
 
     def __init__(self, limits: ActuatorConfig, dt_s: float, rng: np.random.Generator):
+        super().__init__()
         self.p, self.dt, self.rng = limits, dt_s, rng
-        self._speed: dict[str, float] = {}  # ego id -> speed it holds (NaN: not moved yet), m/s
         self._vel: dict[str, np.ndarray] = {}  # ego id -> 2-D velocity it holds, m/s
 
-    def add_ego(self, task: EgoTask) -> None:
-        self._speed[task.vid] = np.nan
-
     def remove_ego(self, vid: str) -> None:
-        self._speed.pop(vid, None)
+        super().remove_ego(vid)
         self._vel.pop(vid, None)
-
-    def stats(self) -> dict:
-        return {}
 
     def held(self, snap: Snapshot) -> Snapshot:
         known = [(snap.index[v], w) for v, w in self._vel.items() if v in snap.index]
@@ -68,10 +63,6 @@ class RelaxationActuator:
         rows, w = zip(*known)
         vel[list(rows)] = np.array(w)
         return replace(snap, vel=vel)
-
-    def speeds(self, snap: Snapshot, ego_ids) -> np.ndarray:
-        held = np.array([self._speed[v] for v in ego_ids])
-        return np.where(np.isnan(held), snap.speed[[snap.index[v] for v in ego_ids]], held)
 
     def step(self, obs: Observation, command: np.ndarray) -> Motion:
         snap, rows, p = obs.snapshot, obs.ego_rows, self.p

@@ -8,6 +8,7 @@ from sumo_avoid import __version__
 from sumo_avoid.core.geometry import footprint_corners
 from sumo_avoid.metrics import basic
 from sumo_avoid.metrics.base import Metric
+from sumo_avoid.rollout.arena import outside_distance as arena_outside_distance
 from sumo_avoid.rollout.result import RunResult
 
 
@@ -25,8 +26,18 @@ def phi_coll(run: RunResult) -> float:
     return run.memo("phi_coll", lambda: basic.phi_coll(run.traj, run.scenario.spec.sim.step_s))
 
 
-def road_phi_wall(run: RunResult) -> float:
-    return run.memo("phi_wall", lambda: basic.phi_wall(ego_outside_distance(run)))
+def phi_wall(run: RunResult) -> float:
+    """SPEC §1.1 φ_wall against the run's allowed area: the road's drivable area (ego footprints), or
+    in an arena its walls and obstacles (ego centres, as the flocking seed defines it)."""
+    return run.memo("phi_wall", lambda: basic.phi_wall(outside_distance(run)))
+
+
+def outside_distance(run: RunResult) -> np.ndarray:
+    scene = run.scene
+    if scene.walls is None:
+        return ego_outside_distance(run)
+    ego = run.traj[run.traj["is_ego"]]
+    return arena_outside_distance(ego[["x", "y"]].to_numpy(), scene.walls, scene.obstacles)
 
 
 class RunInfo(Metric):
@@ -68,10 +79,10 @@ class PhiColl(Metric):
 
 
 class PhiWall(Metric):
-    """SPEC §1.1: mean distance the egos' footprints stick out of the drivable area, m."""
+    """SPEC §1.1: mean distance the egos stick out of the allowed area (road or arena), m."""
 
     def compute(self, run: RunResult) -> dict:
-        return {"phi_wall": road_phi_wall(run)}
+        return {"phi_wall": phi_wall(run)}
 
 
 class PluginStats(Metric):

@@ -74,5 +74,7 @@ def assemble(scn, ctx: Context, controller: Controller) -> Stack:
 
 
 def metric_names(scn) -> tuple[str, ...]:
-    """``output.metrics``, or the standard set plus what the controller declares (``metrics``)."""
-    return scn.spec.output.metrics or STANDARD + CONTROLLERS[scn.spec.ego.controller].factory.metrics
+    """The standard set (the summary, plots, ledger and suites read it), what the controller declares
+    (``metrics``), then what the scenario adds (``output.metrics``); each once, in that order."""
+    names = STANDARD + CONTROLLERS[scn.spec.ego.controller].factory.metrics + scn.spec.output.metrics
+    return tuple(dict.fromkeys(names))

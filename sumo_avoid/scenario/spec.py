@@ -111,8 +111,9 @@ class ObstacleConfig:
 class OutputConfig:
     record_radius_m: float = field_doc(300.0, doc="record non-ego vehicles within this distance of an ego, m (0 = all)")
     plots: bool = field_doc(True, doc="write trajectory.png and timeseries.png")
-    metrics: tuple[str, ...] = field_doc((), doc="metrics to compute, by name (run, collisions, min_gap, phi_coll, phi_wall, plugin_stats, motion, flocking); empty = the standard set "
-                                                 "plus the controller's own (flocking: order parameters and fitness)")
+    metrics: tuple[str, ...] = field_doc((), doc="metrics to compute beside the standard set and the controller's own (flocking: "
+                                                 "order parameters and fitness), by name: run, collisions, min_gap, phi_coll, "
+                                                 "phi_wall, plugin_stats, motion, flocking")
 
 
 @dataclass(frozen=True)

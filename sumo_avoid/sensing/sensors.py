@@ -78,6 +78,5 @@ class RadarSensor(_Base):
         if self._seg_key != ids:  # the padded route segments only change with the egos
             self._seg_key, self._segs = ids, route_segments([self._paths.get(v) for v in ids])
         along = route_directions(None, snap.pos[rows], snap.heading[rows], self._segs)
-        seen = self.front.objects(scans[0] if len(scans) == 1 else scans, along)
-        seen = seen if isinstance(seen, tuple) else (seen,)
+        seen = self.front.objects(scans, along)  # one fused memory over the mounts; a tuple, like scans
         return Observation(snap, ids, rows, ego_speed, self.obstacles, scans, seen, along, self.v2v)
