@@ -62,6 +62,7 @@ import re
 import subprocess
 import sys
 import time
+
 import tomllib
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]

@@ -1,7 +1,6 @@
 """Foundation acceptance on real SUMO: APF-SA through overtaking and left turn, the local
 minimum, and scripted crashes on a straight road and inside the junction."""
 import pytest
-
 from conftest import run_scenario
 
 SEEDS = range(1, 11)

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from sumo_avoid import outputs as evaluate
-from sumo_avoid.rollout import runner
-from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.actuation.relaxation import relax
-from sumo_avoid.rollout.arena import outside_distance, random_positions, square
 from sumo_avoid.core.config import ScenarioError
+from sumo_avoid.rollout import runner
+from sumo_avoid.rollout.arena import outside_distance, random_positions, square
+from sumo_avoid.scenario import spec as scenario
 
 SCN = pathlib.Path(__file__).resolve().parents[1] / "scenarios"
 FLOCK_KEYS = ("phi_corr", "phi_coll", "phi_wall", "v_vel", "n_disc", "n_min", "mu_speed", "mu_coll", "mu_disc",

@@ -16,8 +16,8 @@ import time
 
 import pytest
 
-from sumo_avoid.studies import batch, ledger, worker
 from sumo_avoid.cli import main
+from sumo_avoid.studies import batch, ledger, worker
 from sumo_avoid.studies.worker import run_one
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]

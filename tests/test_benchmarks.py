@@ -5,7 +5,6 @@ import subprocess
 import sys
 
 import pytest
-
 from conftest import ROOT
 
 LAST = re.compile(r"^plugin_s=(\d+\.\d\d) plain_s=(\d+\.\d\d) ratio=(\d+\.\d\d)$")

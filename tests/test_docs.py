@@ -1,5 +1,6 @@
 """docs/scenario_format.md is generated from the config dataclasses and must stay in sync."""
 from conftest import ROOT
+
 from sumo_avoid.scenario.spec import format_reference
 
 

@@ -8,10 +8,22 @@ import numpy as np
 import pytest
 
 from sumo_avoid.actuation.relaxation import relaxation_step
-from sumo_avoid.rollout.arena import square
 from sumo_avoid.control import CONTROLLERS
-from sumo_avoid.control.flocking import PRESETS, FlockingController, FlockingParams, combine, friction, neighbour_pairs, polygon_shills, preset, repulsion, segment_shills, shill
+from sumo_avoid.control.flocking import (
+    PRESETS,
+    FlockingController,
+    FlockingParams,
+    combine,
+    friction,
+    neighbour_pairs,
+    polygon_shills,
+    preset,
+    repulsion,
+    segment_shills,
+    shill,
+)
 from sumo_avoid.metrics.basic import braking_curve_D as D
+from sumo_avoid.rollout.arena import square
 
 P4 = preset("paper_v4")
 
@@ -166,10 +178,10 @@ def test_wall_turns_a_vehicle_back():
 def test_radar_flock_drops_v2v_members_and_keeps_each_egos_own_returns():
     """sensor = "radar": ego a sees member b (dropped: b is known over V2V) and car c; ego b sees
     nothing ahead. Only a feels c's shill (owner mask), and c's box is where the radar put it."""
+    from sumo_avoid.core.snapshot import Snapshot
     from sumo_avoid.core.types import Observation
     from sumo_avoid.sensing.perception import radar_obstacles
     from sumo_avoid.sensing.radar import Radar, RadarParams
-    from sumo_avoid.core.snapshot import Snapshot
 
     ids = ("a", "b", "c")
     pos = np.array([[0.0, 0.0], [15.0, 0.0], [30.0, 12.0]])

@@ -5,7 +5,14 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from sumo_avoid.core.geometry import convex_distance, convex_overlap, footprint_corners, near_any, pairwise_footprint_distance, point_segment_distance
+from sumo_avoid.core.geometry import (
+    convex_distance,
+    convex_overlap,
+    footprint_corners,
+    near_any,
+    pairwise_footprint_distance,
+    point_segment_distance,
+)
 
 S2 = math.sqrt(2.0)
 

@@ -5,7 +5,19 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from sumo_avoid.metrics.basic import F1, F2, F3, braking_curve_D, collision_events, fitness, min_gap_m, motion_summary, phi_coll, phi_wall, transfer_S
+from sumo_avoid.metrics.basic import (
+    F1,
+    F2,
+    F3,
+    braking_curve_D,
+    collision_events,
+    fitness,
+    min_gap_m,
+    motion_summary,
+    phi_coll,
+    phi_wall,
+    transfer_S,
+)
 
 DT = 0.5
 

@@ -7,7 +7,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from sumo_avoid.plots.trajectories import footprint_corners, plot_timeseries, plot_trajectories
+from sumo_avoid.plots.trajectories import (
+    footprint_corners,
+    plot_timeseries,
+    plot_trajectories,
+)
 from sumo_avoid.sumo.road import Road
 
 NETS = pathlib.Path(__file__).resolve().parents[1] / "nets"

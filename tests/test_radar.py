@@ -3,11 +3,11 @@ import math
 
 import numpy as np
 import pytest
-
 from radar_reference import _shadowed, visible_reference
+
+from sumo_avoid.core.snapshot import Snapshot
 from sumo_avoid.sensing.occlusion import depth
 from sumo_avoid.sensing.radar import Radar, RadarParams
-from sumo_avoid.core.snapshot import Snapshot
 
 EXACT = dict(range_sigma_m=0.0, speed_sigma_mps=0.0, angular_resolution_deg=0.0)
 
@@ -337,6 +337,7 @@ def test_compiled_footprints_and_candidates_equal_the_numpy_and_kdtree_versions(
     along one axis) gives exactly the (ego, target) pairs of the k-d tree version it replaced, in
     the same order, on random scenes, dense jams and a road along y (the sweep then runs on y)."""
     from radar_reference import _candidates
+
     from sumo_avoid.core.geometry import footprint_corners
     from sumo_avoid.sensing.occlusion import boxes, candidates
 

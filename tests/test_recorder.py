@@ -1,8 +1,8 @@
 """Recorder: which vehicles are recorded (egos, and others within the recording radius of one)."""
 import numpy as np
 
-from sumo_avoid.rollout.recorder import Recorder
 from sumo_avoid.core.snapshot import Snapshot
+from sumo_avoid.rollout.recorder import Recorder
 
 
 def test_recorder_keeps_egos_and_vehicles_within_the_radius():

@@ -6,8 +6,8 @@ import pathlib
 import pandas as pd
 import pytest
 
-from sumo_avoid.studies import batch, ledger
 from sumo_avoid.cli import main
+from sumo_avoid.studies import batch, ledger
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 OVERTAKING = ROOT / "scenarios" / "overtaking.toml"

@@ -6,7 +6,11 @@ import pathlib
 import numpy as np
 import pytest
 
-from sumo_avoid.core.polyline import polyline_length, polyline_point_at, polyline_project
+from sumo_avoid.core.polyline import (
+    polyline_length,
+    polyline_point_at,
+    polyline_project,
+)
 from sumo_avoid.sumo.road import Road
 
 NETS = pathlib.Path(__file__).resolve().parents[1] / "nets"

@@ -12,7 +12,6 @@ from sumo_avoid.actuation.kinematic import KinematicActuator
 from sumo_avoid.actuation.params import ActuatorConfig
 from sumo_avoid.control import CONTROLLERS
 from sumo_avoid.core.config import field_doc
-from sumo_avoid.core.interfaces import Context
 from sumo_avoid.core.snapshot import Snapshot
 from sumo_avoid.core.types import Needs
 from sumo_avoid.rollout.assemble import Stack

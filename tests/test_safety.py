@@ -4,10 +4,19 @@ import math
 import numpy as np
 import pytest
 
-from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.core.config import ScenarioError
-from sumo_avoid.safety.danger_time import BRAKE, NONE, REDUCE, WARNING, DangerTimeLayer, DangerTimeParams, danger_time, levels
 from sumo_avoid.core.types import Detections
+from sumo_avoid.safety.danger_time import (
+    BRAKE,
+    NONE,
+    REDUCE,
+    WARNING,
+    DangerTimeLayer,
+    DangerTimeParams,
+    danger_time,
+    levels,
+)
+from sumo_avoid.scenario import spec as scenario
 
 P = DangerTimeParams()
 W = np.array([1.8, 1.8])

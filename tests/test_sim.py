@@ -4,10 +4,10 @@ import math
 
 import numpy as np
 import pytest
-
 from conftest import ROOT, SCENARIOS
-from sumo_avoid.sumo.sim import SumoSim, sumo_args
+
 from sumo_avoid.core.snapshot import Snapshot
+from sumo_avoid.sumo.sim import SumoSim, sumo_args
 
 
 def _start():

@@ -26,10 +26,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from sumo_avoid.core.config import field_doc
-from sumo_avoid.core.geometry import convex_distance, footprint_corners, point_segment_distance
+from sumo_avoid.core.geometry import (
+    convex_distance,
+    footprint_corners,
+    point_segment_distance,
+)
 from sumo_avoid.core.polyline import polyline_point_at, polyline_project
-from sumo_avoid.sensing.perception import obstacle_vehicles
 from sumo_avoid.core.types import EgoTask, Needs, Observation
+from sumo_avoid.sensing.perception import obstacle_vehicles
 
 
 @dataclass(frozen=True)

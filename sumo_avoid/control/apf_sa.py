@@ -26,12 +26,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sumo_avoid.control.apf import ApfController, ApfParams
 from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.geometry import footprint_corners, point_segment_distance
 from sumo_avoid.core.polyline import polyline_project, polyline_tangent
-from sumo_avoid.sensing.perception import obstacle_vehicles
-from sumo_avoid.control.apf import ApfController, ApfParams
 from sumo_avoid.core.types import EgoTask, Observation
+from sumo_avoid.sensing.perception import obstacle_vehicles
 
 
 @dataclass(frozen=True)

@@ -39,11 +39,16 @@ from shapely.geometry import MultiPolygon, Polygon
 from shapely.geometry.polygon import orient
 
 from sumo_avoid.core.config import field_doc
-from sumo_avoid.core.geometry import ccw_polygon, footprint_corners, pad_polygons, ring_walls
 from sumo_avoid.core.curves import braking_curve_D as D
+from sumo_avoid.core.geometry import (
+    ccw_polygon,
+    footprint_corners,
+    pad_polygons,
+    ring_walls,
+)
+from sumo_avoid.core.types import EgoTask, Needs, Observation
 from sumo_avoid.sensing.perception import radar_obstacles
 from sumo_avoid.sensing.v2v import V2VParams
-from sumo_avoid.core.types import EgoTask, Needs, Observation
 
 # seed Table 3 (GA-optimised values at v_flock = 4 / 6 / 8 m/s). v_max is printed only for
 # v_flock = 4 (8 m/s); we keep the same ratio v_max = 2 v_flock for 6 and 8 (assumption).

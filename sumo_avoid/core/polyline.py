@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+
 def _as_path(path) -> np.ndarray:
     p = np.asarray(path, dtype=float).reshape(-1, 2)
     if len(p) == 0:

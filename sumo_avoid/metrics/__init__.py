@@ -3,7 +3,15 @@ controller's own). Each is a :class:`~sumo_avoid.metrics.base.Metric`; later one
 from sumo_avoid.core.registry import Registry
 from sumo_avoid.metrics.base import clean
 from sumo_avoid.metrics.flocking import FlockingOrder
-from sumo_avoid.metrics.standard import Collisions, MinGap, Motion, PhiColl, PhiWall, PluginStats, RunInfo
+from sumo_avoid.metrics.standard import (
+    Collisions,
+    MinGap,
+    Motion,
+    PhiColl,
+    PhiWall,
+    PluginStats,
+    RunInfo,
+)
 
 METRICS = Registry("metric")
 METRICS.register("run", RunInfo)

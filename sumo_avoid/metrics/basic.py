@@ -16,7 +16,6 @@ import numpy as np
 import pandas as pd
 
 from sumo_avoid.core.curves import braking_curve_D  # noqa: F401  (SPEC §1 eq. 3; tests and fitness)
-
 from sumo_avoid.core.geometry import convex_distance, convex_overlap, footprint_corners
 
 __all__ = [

@@ -14,15 +14,15 @@ import os
 from typing import TYPE_CHECKING
 
 import numpy as np
-
-from sumo_avoid.core import geometry
+import shapely
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
-from matplotlib.patches import PathPatch
-from matplotlib.path import Path
-import shapely
 from matplotlib.lines import Line2D
+from matplotlib.patches import PathPatch
 from matplotlib.patches import Polygon as MplPolygon
+from matplotlib.path import Path
+
+from sumo_avoid.core import geometry
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd

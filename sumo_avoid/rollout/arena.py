@@ -8,8 +8,8 @@ of every point to map a vehicle onto; the walls are the square, not the roads.
 from __future__ import annotations
 
 import numpy as np
-from shapely.geometry import Polygon
 import shapely
+from shapely.geometry import Polygon
 
 
 def square(origin, size_m: float) -> np.ndarray:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+
 from sumo_avoid.core.geometry import near_any
 from sumo_avoid.core.snapshot import Snapshot
 

@@ -9,13 +9,13 @@ import time
 
 from tqdm import tqdm
 
+from sumo_avoid.core.interfaces import Context
 from sumo_avoid.rollout.arena import ArenaSpawn, StaticObstacles, square
 from sumo_avoid.rollout.assemble import assemble, controller_for
 from sumo_avoid.rollout.egos import EgoBook
 from sumo_avoid.rollout.loop import rollout
 from sumo_avoid.rollout.recorder import Recorder
 from sumo_avoid.rollout.result import RunResult, Scene
-from sumo_avoid.core.interfaces import Context
 from sumo_avoid.sumo.road import Road
 from sumo_avoid.sumo.sim import SumoSim, sumo_args
 

@@ -10,21 +10,20 @@ from __future__ import annotations
 import math
 import pathlib
 import sys
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
-
-from sumo_avoid.core.config import ScenarioError, build, describe, field_doc
 
 from sumo_avoid.actuation import ACTUATORS
 from sumo_avoid.actuation.params import ActuatorConfig
 from sumo_avoid.control import CONTROLLERS
+from sumo_avoid.core.config import ScenarioError, build, describe, field_doc
 from sumo_avoid.metrics import METRICS
 from sumo_avoid.safety import LAYERS
-from sumo_avoid.sensing import SENSORS
-from sumo_avoid.sumo.road import Road
 from sumo_avoid.safety.danger_time import DangerTimeParams
+from sumo_avoid.sensing import SENSORS
 from sumo_avoid.sensing.radar import RadarParams
+from sumo_avoid.sumo.road import Road
 
 if sys.version_info >= (3, 11):
     import tomllib

@@ -46,7 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sumo_avoid.core.config import field_doc
-from sumo_avoid.core.geometry import footprint_corners, wrap_angle
+from sumo_avoid.core.geometry import wrap_angle
 from sumo_avoid.core.types import Detections
 from sumo_avoid.sensing import occlusion
 from sumo_avoid.sensing.tracker import Tracker

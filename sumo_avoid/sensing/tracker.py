@@ -16,11 +16,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
-from sumo_avoid.sensing.perception import velocity_estimate
-from sumo_avoid.core.types import Detections
 from scipy.spatial import cKDTree
 
+from sumo_avoid.core.types import Detections
+from sumo_avoid.sensing.perception import velocity_estimate
 
 _EGO_SEPARATION_M = 1e6  # egos' returns are kept apart in the search tree along a third axis
 

@@ -21,18 +21,14 @@ import sys
 import time
 from dataclasses import dataclass, field
 
-from sumo_avoid.studies import ledger as ledger_mod
-from sumo_avoid.studies import worker
-from sumo_avoid.core.config import ScenarioError, check_table
-from sumo_avoid.studies.worker import CRASHES, kill_all, run_one
-from sumo_avoid.scenario import spec as scenario
-from sumo_avoid.scenario.spec import read_toml
 from tqdm import tqdm
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
+from sumo_avoid.core.config import ScenarioError, check_table
+from sumo_avoid.scenario import spec as scenario
+from sumo_avoid.scenario.spec import read_toml
+from sumo_avoid.studies import ledger as ledger_mod
+from sumo_avoid.studies import worker
+from sumo_avoid.studies.worker import CRASHES, kill_all, run_one
 
 KEY_VERSION = b"sumo_avoid-run-key-v1"
 
@@ -50,7 +46,7 @@ class RunSpec:
     name: str = ""  # scenario name (filled by plan())
     effective_controller: str = ""
     net_file: str = ""
-    plots: bool = True  # the run writes plots (the fork server then preloads matplotlib once)
+    plots: bool = True  # the run writes plots (output.plots)
 
     def to_json(self) -> dict:
         return {"scenario": self.scenario, "seed": self.seed, "overrides": list(self.overrides),

@@ -20,12 +20,6 @@ from sumo_avoid.sensing import occlusion
 from sumo_avoid.studies.worker import _exit_now, child
 
 
-def _preload(plots: bool) -> None:
-    """What every run needs is imported with this module (worker -> outputs, runner, plots); the
-    radar's compiled kernel is loaded here (numba; from its on-disk cache after the first time)."""
-    occlusion.warm()
-
-
 def serve(parent: int) -> int:
     """Fork one child per job line on stdin; reply one JSON line per finished child on stdout.
 
@@ -33,8 +27,9 @@ def serve(parent: int) -> int:
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C: the batch process kills us (and ours)
     t0 = time.perf_counter()
-    _preload(plots=False)
-    plots_loaded = False
+    # what every run needs, plots included, came with this module's imports (worker -> outputs,
+    # runner, plots); the radar's compiled kernel is loaded now (numba, from its on-disk cache)
+    occlusion.warm()
 
     def reply(msg: dict) -> None:
         os.write(1, json.dumps(msg).encode() + b"\n")
@@ -68,9 +63,6 @@ def serve(parent: int) -> int:
                 while b"\n" in buf:
                     line, buf = buf.split(b"\n", 1)
                     job = json.loads(line)
-                    if job.get("plots") and not plots_loaded:
-                        _preload(plots=True)
-                        plots_loaded = True
                     job["parent"] = os.getpid()
                     fork_wall = time.time()
                     try:

@@ -18,6 +18,7 @@ import pathlib
 import re
 import sqlite3
 from importlib import metadata
+
 import pandas as pd
 
 FIXED = {  # column -> SQL type; metric columns are added after these

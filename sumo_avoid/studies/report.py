@@ -17,15 +17,19 @@ import html
 import io
 import json
 import pathlib
-import types
-import pandas as pd
-from sumo_avoid.studies import ledger
-from sumo_avoid.plots.trajectories import _new_figure
-from sumo_avoid.plots.trajectories import plot_trajectories
-from sumo_avoid.sumo.road import Road
-from sumo_avoid.metrics.series import series
-from sumo_avoid.plots.trajectories import plot_timeseries
 import sys
+import types
+
+import pandas as pd
+
+from sumo_avoid.metrics.series import series
+from sumo_avoid.plots.trajectories import (
+    _new_figure,
+    plot_timeseries,
+    plot_trajectories,
+)
+from sumo_avoid.studies import ledger
+from sumo_avoid.sumo.road import Road
 
 METRICS = ("collisions", "min_gap_m", "phi_coll", "phi_wall", "mean_speed_mps", "time_to_goal_s",
            "path_length_m", "sumo_collisions")

@@ -18,13 +18,13 @@ import sys
 import time
 
 import numpy as np
+import pandas as pd
 
 from sumo_avoid.metrics import basic
 from sumo_avoid.metrics.flocking import FlockingOrder
 from sumo_avoid.plots.arena import plot_arena
 from sumo_avoid.rollout import runner
 from sumo_avoid.scenario import spec as scenario
-import pandas as pd
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 SPEEDS = (4, 6, 8)

@@ -17,16 +17,16 @@ from __future__ import annotations
 import dataclasses
 import math
 import operator
+import os
 import pathlib
 import re
 import tempfile
 import xml.etree.ElementTree as ET
 
 from sumo_avoid.core.config import ScenarioError, check_table
-from sumo_avoid.studies.batch import parse_seeds
 from sumo_avoid.scenario.spec import read_toml
-import os
 from sumo_avoid.studies import batch, ledger
+from sumo_avoid.studies.batch import parse_seeds
 
 OPS = {"==": operator.eq, "!=": operator.ne, "<=": operator.le, ">=": operator.ge, "<": operator.lt, ">": operator.gt}
 AGGREGATES = ("rate", "mean", "min", "max")

@@ -20,10 +20,15 @@ import os
 
 import numpy as np
 import shapely
+import sumolib
 from shapely.geometry import LineString, MultiPolygon, Polygon
 
-from sumo_avoid.core.polyline import _as_path, _cumlen, polyline_length, polyline_point_at, polyline_project
-import sumolib
+from sumo_avoid.core.polyline import (
+    _cumlen,
+    polyline_length,
+    polyline_point_at,
+    polyline_project,
+)
 
 
 def _dedupe(points: np.ndarray, tol: float = 1e-6) -> np.ndarray:
