@@ -1,4 +1,5 @@
 """The SQLite ledger: one row per key, done rows final, metrics as columns, CSV export."""
+import pathlib
 import sqlite3
 
 import pandas as pd
@@ -70,3 +71,12 @@ def test_code_version_and_rows_made_by_other_code(tmp_path):
     ledger.record(con, {**_row("d", "failed", "boom"), "code": "0123456789abcdef"})  # failed: re-run anyway
     assert ledger.made_by_other_code(con, ["a", "b", "c", "d"], v) == 2
     assert ledger.made_by_other_code(con, ["a"], v) == 0 and ledger.made_by_other_code(con, [], v) == 0
+
+
+def test_code_version_hashes_the_whole_package():
+    """The code column must change with any module of the package, not only with studies/."""
+    import sumo_avoid
+    from sumo_avoid.studies.ledger import CODE_ROOT
+
+    assert CODE_ROOT == pathlib.Path(sumo_avoid.__file__).resolve().parent
+    assert (CODE_ROOT / "rollout" / "loop.py").is_file()

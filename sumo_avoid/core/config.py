@@ -16,9 +16,16 @@ class ScenarioError(ValueError):
     """A scenario (or an override) is malformed. ``str(err)`` is the one-line message."""
 
     def __init__(self, file: str, key: str, expected: str, got: Any = None, *, show_got: bool = True):
-        self.file, self.key, self.expected = file, key, expected
+        self.file, self.key, self.expected, self.got, self.show_got = file, key, expected, got, show_got
         got_txt = f", got {got!r}" if show_got else ""
         super().__init__(f"{file}: key '{key}': expected {expected}{got_txt}")
+
+    def __reduce__(self):  # picklable: raised in a pool worker, it must reach the parent whole
+        return _rebuild_error, (self.file, self.key, self.expected, self.got, self.show_got)
+
+
+def _rebuild_error(file, key, expected, got, show_got) -> ScenarioError:
+    return ScenarioError(file, key, expected, got, show_got=show_got)
 
 
 def check_table(file: str, where: str, table, allowed) -> None:

@@ -78,12 +78,15 @@ def scalar_metrics(metrics: dict) -> dict:
     return out
 
 
+CODE_ROOT = pathlib.Path(__file__).resolve().parents[1]  # the sumo_avoid package (this file: studies/)
+
+
 @functools.lru_cache(maxsize=1)
 def code_version() -> str:
     """16 hex digits naming the plug-in's code: sha256 of every ``sumo_avoid/**/*.py`` (path and
     bytes) and SUMO's version. A run key covers a run's inputs, not the code; this column tells
     rows made by different code apart."""
-    root = pathlib.Path(__file__).resolve().parent
+    root = CODE_ROOT
     h = hashlib.sha256()
     for f in sorted(root.rglob("*.py")):
         h.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes() + b"\0")

@@ -26,7 +26,7 @@ from sumo_avoid.plots.arena import plot_arena
 from sumo_avoid.rollout import runner
 from sumo_avoid.scenario import spec as scenario
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]  # the checkout: sumo_avoid/studies/ -> ../..
 SPEEDS = (4, 6, 8)
 # SPEC §1.3, mean and sd over the seed's 100 evaluations; phi_coll in metrics.json units (not x1e-6)
 PAPER = {
