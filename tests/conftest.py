@@ -1,3 +1,7 @@
+import contextlib
+import dataclasses
+import io
+import os
 import pathlib
 
 import pytest
@@ -20,6 +24,32 @@ def run_scenario(name: str, **kw):
     scn = scenario.load(SCENARIOS / f"{name}.toml", kw.pop("overrides", []), **kw)
     res = runner.run(scn)
     return res, evaluate.run_metrics(res)
+
+
+@dataclasses.dataclass
+class CliResult:
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+def cli_in_process(*args, cwd=None) -> CliResult:
+    """``sumo-avoid ARGS`` in this process: for input the CLI rejects before SUMO starts (a fresh
+    interpreter costs ~2.5 s of imports per call). An exception escaping ``main`` fails the test
+    as a traceback would; SUMO's own C++ output is not captured here, so cases that reach SUMO
+    run the real command in a subprocess."""
+    from sumo_avoid import cli
+
+    out, err = io.StringIO(), io.StringIO()
+    old = os.getcwd()
+    try:
+        if cwd is not None:
+            os.chdir(cwd)
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            rc = cli.main([str(a) for a in args])
+    finally:
+        os.chdir(old)
+    return CliResult(rc, out.getvalue(), err.getvalue())
 
 
 _STARTS_SUMO = ("runner.run", "run_scenario", "SumoSim", "main([", "run_batch", "run_suite", "subprocess",

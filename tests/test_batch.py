@@ -16,6 +16,8 @@ import time
 
 import pytest
 
+from conftest import cli_in_process
+
 from sumo_avoid.cli import main
 from sumo_avoid.studies import batch, ledger, worker
 from sumo_avoid.studies.worker import run_one
@@ -213,7 +215,7 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path):
     for args, words in [(["--seeds", "5-1"], "--seeds"), (["--set", "sim.duration_s=-1"], "sim.duration_s"),
                         (["--workers", "0"], "--workers"), (["--controller", "nope"], "ego.controller"),
                         (["--start", "vfork"], "--start")]:
-        r = _cli("batch", OVERTAKING, "--ledger", db, *args)
+        r = cli_in_process("batch", OVERTAKING, "--ledger", db, *args, cwd=ROOT)
         assert r.returncode == 2, r.stderr
         assert r.stderr.count("\n") == 1 and words in r.stderr and r.stderr.startswith("sumo-avoid: error:")
     bad = tmp_path / "b.toml"

@@ -5,7 +5,7 @@ import subprocess
 import sys
 
 import pytest
-from conftest import SCENARIOS
+from conftest import SCENARIOS, cli_in_process
 
 GOOD = (SCENARIOS / "overtaking.toml").read_text()
 
@@ -44,7 +44,7 @@ def test_bad_scenario_exits_2_with_one_line(tmp_path, case):
     path = write(tmp_path, text, f"{case}.toml")
     out = tmp_path / "out"
     try:
-        r = cli("run", path, "--out", out)
+        r = cli_in_process("run", path, "--out", out)
     finally:
         path.unlink()
     assert r.returncode == 2, r.stderr
@@ -56,9 +56,9 @@ def test_bad_scenario_exits_2_with_one_line(tmp_path, case):
 
 
 def test_bad_override_and_missing_file(tmp_path):
-    r = cli("run", SCENARIOS / "overtaking.toml", "--set", "sim.step_s=-1", "--out", tmp_path / "o")
+    r = cli_in_process("run", SCENARIOS / "overtaking.toml", "--set", "sim.step_s=-1", "--out", tmp_path / "o")
     assert r.returncode == 2 and "sim.step_s" in r.stderr and len(r.stderr.strip().splitlines()) == 1
-    r = cli("run", tmp_path / "none.toml")
+    r = cli("run", tmp_path / "none.toml")  # one case through a real process: nothing but our line
     assert r.returncode == 2 and "none.toml" in r.stderr
     assert not (tmp_path / "o").exists()
 

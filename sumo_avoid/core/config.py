@@ -1,7 +1,12 @@
-"""Validation of nested plain data (from TOML) into frozen dataclasses.
+"""Validation of nested plain data (from TOML) into frozen dataclasses: the one mechanism for
+scenario, batch and suite files.
 
-Every error names the file, the dotted key and what was expected, and is raised as
-:class:`ScenarioError`; the CLI prints it as one line and exits with code 2.
+A file format is a tree of frozen dataclasses whose fields carry their doc and constraints
+(:func:`field_doc`: ``signed``, ``positive``, ``nonempty``); lists of tables are
+``tuple[SomeDataclass, ...]``. :func:`build` walks the data against the tree. Every error names the
+file, the dotted key and what was expected, and is raised as :class:`ScenarioError`; the CLI
+prints it as one line and exits with code 2. Cross-field checks live in ``__post_init__`` and raise
+:class:`FieldError` (naming the key) or ``ValueError`` (the table as a whole).
 """
 from __future__ import annotations
 
@@ -28,18 +33,24 @@ def _rebuild_error(file, key, expected, got, show_got) -> ScenarioError:
     return ScenarioError(file, key, expected, got, show_got=show_got)
 
 
-def check_table(file: str, where: str, table, allowed) -> None:
-    """A ``[[...]]`` entry must be a table with only ``allowed`` keys."""
-    if not isinstance(table, dict):
-        raise ScenarioError(file, where, "a table", table)
-    for k in table:
-        if k not in allowed:
-            raise ScenarioError(file, f"{where}.{k}", f"one of the known keys {sorted(allowed)}", show_got=False)
+class FieldError(ValueError):
+    """Raised by a config dataclass's ``__post_init__``: field ``key`` (relative to the table)
+    is wrong; ``expected`` says what it should be. :func:`build` adds the file and the prefix."""
+
+    def __init__(self, key: str, expected: str, got: Any = None, *, show_got: bool = True):
+        self.key, self.expected, self.got, self.show_got = key, expected, got, show_got
+        super().__init__(f"{key}: expected {expected}")
 
 
-def field_doc(default=dataclasses.MISSING, *, doc: str = "", signed: bool = False, **kw):
-    """A dataclass field with a docstring (units!) and whether negative values are allowed."""
-    return dataclasses.field(default=default, metadata={"doc": doc, "signed": signed}, **kw)
+def field_doc(default=dataclasses.MISSING, *, doc: str = "", signed: bool = False, positive: bool = False,
+              nonempty: bool = False, **kw):
+    """A dataclass field with a docstring (units!) and its constraints: negative numbers allowed
+    (``signed``), strictly positive (``positive``), a non-empty string or list (``nonempty``)."""
+    return dataclasses.field(default=default, metadata={"doc": doc, "signed": signed, "positive": positive,
+                                                        "nonempty": nonempty}, **kw)
+
+
+_NO_CONSTRAINTS = {"signed": False, "positive": False, "nonempty": False}
 
 
 def _type_name(tp) -> str:
@@ -52,7 +63,7 @@ def _type_name(tp) -> str:
             type(None): "nothing"}.get(tp, getattr(tp, "__name__", str(tp)))
 
 
-def _coerce(value, tp, file: str, key: str, signed: bool):
+def _coerce(value, tp, file: str, key: str, meta):
     origin = typing.get_origin(tp)
     if origin in (typing.Union, types.UnionType):
         args = typing.get_args(tp)
@@ -63,28 +74,37 @@ def _coerce(value, tp, file: str, key: str, signed: bool):
             if a is type(None):
                 continue
             try:
-                return _coerce(value, a, file, key, signed)
+                return _coerce(value, a, file, key, meta)
             except ScenarioError as e:
                 errors.append(e)
+        if len(errors) == 1:  # Optional[X]: X's own message ("a positive number", not "a number or nothing")
+            raise errors[0]
         raise ScenarioError(file, key, _type_name(tp), value)
     if origin in (tuple, list):
         if not isinstance(value, (list, tuple)):
             raise ScenarioError(file, key, _type_name(tp), value)
-        (item_tp, *rest) = typing.get_args(tp)
-        return tuple(_coerce(v, item_tp, file, f"{key}[{i}]", signed) for i, v in enumerate(value))
+        if meta["nonempty"] and not value:
+            raise ScenarioError(file, key, f"a non-empty list of {_type_name(typing.get_args(tp)[0])}", value)
+        item_tp = typing.get_args(tp)[0]
+        item_meta = {**meta, "nonempty": False}
+        return tuple(_coerce(v, item_tp, file, f"{key}[{i}]", item_meta) for i, v in enumerate(value))
     if tp is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ScenarioError(file, key, "a number", value)
         value = float(value)
         if not math.isfinite(value):
             raise ScenarioError(file, key, "a finite number", value)
-        if value < 0 and not signed:
+        if meta["positive"] and value <= 0:
+            raise ScenarioError(file, key, "a positive number", value)
+        if value < 0 and not meta["signed"]:
             raise ScenarioError(file, key, "a non-negative number", value)
         return value
     if tp is int:
         if isinstance(value, bool) or not isinstance(value, int):
             raise ScenarioError(file, key, "an integer", value)
-        if value < 0 and not signed:
+        if meta["positive"] and value <= 0:
+            raise ScenarioError(file, key, "a positive integer", value)
+        if value < 0 and not meta["signed"]:
             raise ScenarioError(file, key, "a non-negative integer", value)
         return value
     if tp is bool:
@@ -94,6 +114,8 @@ def _coerce(value, tp, file: str, key: str, signed: bool):
     if tp is str:
         if not isinstance(value, str):
             raise ScenarioError(file, key, "a string", value)
+        if meta["nonempty"] and not value:
+            raise ScenarioError(file, key, "a non-empty string", value)
         return value
     if dataclasses.is_dataclass(tp):
         return build(tp, value, file, key)
@@ -119,7 +141,7 @@ def build(cls, data, file: str, prefix: str = ""):
     for name, f in fields.items():
         key = f"{prefix}.{name}" if prefix else name
         if name in data:
-            kwargs[name] = _coerce(data[name], hints[name], file, key, f.metadata.get("signed", False))
+            kwargs[name] = _coerce(data[name], hints[name], file, key, {**_NO_CONSTRAINTS, **f.metadata})
         elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
             raise ScenarioError(file, key, f"a value ({_type_name(hints[name])}); the key is required",
                                 show_got=False)
@@ -127,6 +149,9 @@ def build(cls, data, file: str, prefix: str = ""):
         return cls(**kwargs)
     except ScenarioError:
         raise
+    except FieldError as e:  # a field's check in __post_init__
+        key = f"{prefix}.{e.key}" if prefix else e.key
+        raise ScenarioError(file, key, e.expected, e.got, show_got=e.show_got) from None
     except ValueError as e:  # cross-field checks in __post_init__
         raise ScenarioError(file, where, str(e), show_got=False) from None
 

@@ -23,11 +23,12 @@ from dataclasses import dataclass, field
 
 from tqdm import tqdm
 
-from sumo_avoid.core.config import ScenarioError, check_table
+from sumo_avoid.core.config import ScenarioError, build
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.spec import read_toml
 from sumo_avoid.studies import ledger as ledger_mod
 from sumo_avoid.studies import worker
+from sumo_avoid.studies.files import BatchFile
 from sumo_avoid.studies.worker import CRASHES, kill_all, run_one
 
 KEY_VERSION = b"sumo_avoid-run-key-v1"
@@ -148,51 +149,18 @@ def load_batch_file(path) -> tuple[list[RunSpec], dict]:
     to the batch file. Returns (runs, options)."""
     path = pathlib.Path(path)
     file = str(path)
-    data = read_toml(path)
-    allowed_top = {"workers", "ledger", "timeout_s", "runs"}
-    allowed_run = {"scenario", "seeds", "set", "controllers", "grid", "inject_crash"}
-    for k in data:
-        if k not in allowed_top:
-            raise ScenarioError(file, k, f"one of the known keys {sorted(allowed_top)}", show_got=False)
-    entries = data.get("runs")
-    if not isinstance(entries, list) or not entries:
-        raise ScenarioError(file, "runs", "at least one [[runs]] table", show_got=False)
+    bf = build(BatchFile, read_toml(path), file)
     specs, seen = [], set()
-    for i, e in enumerate(entries):
-        where = f"runs[{i}]"
-        check_table(file, where, e, allowed_run)
-        if not isinstance(e.get("scenario"), str):
-            raise ScenarioError(file, f"{where}.scenario", "a scenario file path (string)", e.get("scenario"))
-        sets = e.get("set", [])
-        if not isinstance(sets, list) or not all(isinstance(s, str) for s in sets):
-            raise ScenarioError(file, f"{where}.set", "a list of KEY=VALUE strings", sets)
-        ctls = e.get("controllers", [None])
-        if not isinstance(ctls, list) or not all(c is None or isinstance(c, str) for c in ctls):
-            raise ScenarioError(file, f"{where}.controllers", "a list of controller names", ctls)
-        grid = e.get("grid", {})
-        if not isinstance(grid, dict) or not all(isinstance(v, list) and v for v in grid.values()):
-            raise ScenarioError(file, f"{where}.grid", "a table of KEY = [values...]", grid)
-        if "seeds" not in e:
-            raise ScenarioError(file, f"{where}.seeds", "seeds like \"1-20\" or a list", show_got=False)
-        seeds = parse_seeds(e["seeds"], file, f"{where}.seeds")
-        scn = (path.resolve().parent / e["scenario"])
-        for s in expand([scn], seeds, sets, ctls, grid, e.get("inject_crash")):
+    for i, e in enumerate(bf.runs):
+        seeds = parse_seeds(e.seeds, file, f"runs[{i}].seeds")
+        scn = (path.resolve().parent / e.scenario)
+        for s in expand([scn], seeds, e.set, e.controllers or (None,), e.grid, e.inject_crash):
             if s.key not in seen:
                 seen.add(s.key)
                 specs.append(s)
-    opts = {}
-    if "workers" in data:
-        if not isinstance(data["workers"], int) or data["workers"] < 1:
-            raise ScenarioError(file, "workers", "a positive integer", data["workers"])
-        opts["workers"] = data["workers"]
-    if "timeout_s" in data:
-        if not isinstance(data["timeout_s"], (int, float)) or data["timeout_s"] <= 0:
-            raise ScenarioError(file, "timeout_s", "a positive number", data["timeout_s"])
-        opts["timeout_s"] = float(data["timeout_s"])
-    if "ledger" in data:
-        if not isinstance(data["ledger"], str):
-            raise ScenarioError(file, "ledger", "a file path (string)", data["ledger"])
-        opts["ledger"] = path.resolve().parent / data["ledger"]
+    opts = {k: v for k, v in (("workers", bf.workers), ("timeout_s", bf.timeout_s)) if v is not None}
+    if bf.ledger is not None:
+        opts["ledger"] = path.resolve().parent / bf.ledger
     return specs, opts
 
 

@@ -23,10 +23,11 @@ import re
 import tempfile
 import xml.etree.ElementTree as ET
 
-from sumo_avoid.core.config import ScenarioError, check_table
+from sumo_avoid.core.config import ScenarioError, build
 from sumo_avoid.scenario.spec import read_toml
 from sumo_avoid.studies import batch, ledger
 from sumo_avoid.studies.batch import parse_seeds
+from sumo_avoid.studies.files import SuiteFile
 
 OPS = {"==": operator.eq, "!=": operator.ne, "<=": operator.le, ">=": operator.ge, "<": operator.lt, ">": operator.gt}
 AGGREGATES = ("rate", "mean", "min", "max")
@@ -103,42 +104,18 @@ def load(path, seeds_override=None, extra_sets=()) -> list[Entry]:
     """Read and validate a suite file (raises ScenarioError)."""
     path = pathlib.Path(path)
     file = str(path)
-    data = read_toml(path)
-    for k in data:
-        if k not in ("defaults", "entry"):
-            raise ScenarioError(file, k, "one of the known keys ['defaults', 'entry']", show_got=False)
-    defaults = data.get("defaults", {})
-    if not isinstance(defaults, dict) or set(defaults) - {"seeds", "set"}:
-        raise ScenarioError(file, "defaults", "a table with only 'seeds' and 'set'", show_got=False)
-    entries = data.get("entry")
-    if not isinstance(entries, list) or not entries:
-        raise ScenarioError(file, "entry", "at least one [[entry]] table", show_got=False)
-    out, names = [], set()
-    allowed = {"name", "scenario", "controller", "seeds", "set", "criteria"}
-    for i, e in enumerate(entries):
+    sf = build(SuiteFile, read_toml(path), file)
+    out = []
+    for i, e in enumerate(sf.entry):
         where = f"entry[{i}]"
-        check_table(file, where, e, allowed)
-        for k in ("name", "scenario"):
-            if not isinstance(e.get(k), str) or not e[k]:
-                raise ScenarioError(file, f"{where}.{k}", "a non-empty string", e.get(k))
-        if e["name"] in names:
-            raise ScenarioError(file, f"{where}.name", "a name not used by another entry", e["name"])
-        names.add(e["name"])
-        ctl = e.get("controller")
-        if ctl is not None and not isinstance(ctl, str):
-            raise ScenarioError(file, f"{where}.controller", "a controller name", ctl)
-        raw_seeds = seeds_override if seeds_override is not None else e.get("seeds", defaults.get("seeds"))
+        raw_seeds = seeds_override if seeds_override is not None else (e.seeds if e.seeds is not None
+                                                                         else sf.defaults.seeds)
         if raw_seeds is None:
             raise ScenarioError(file, f"{where}.seeds", "seeds like \"1-5\" (here or in [defaults])", show_got=False)
         seeds = parse_seeds(raw_seeds, file, f"{where}.seeds")
-        sets = list(defaults.get("set", [])) + list(e.get("set", [])) + list(extra_sets)
-        if not all(isinstance(s, str) for s in sets):
-            raise ScenarioError(file, f"{where}.set", "a list of KEY=VALUE strings", sets)
-        crits = e.get("criteria")
-        if not isinstance(crits, list) or not crits:
-            raise ScenarioError(file, f"{where}.criteria", "a non-empty list of criteria strings", crits)
-        parsed = tuple(Criterion.parse(c, file, f"{where}.criteria[{j}]") for j, c in enumerate(crits))
-        out.append(Entry(e["name"], path.resolve().parent / e["scenario"], ctl, seeds, tuple(sets), parsed))
+        sets = sf.defaults.set + e.set + tuple(extra_sets)
+        parsed = tuple(Criterion.parse(c, file, f"{where}.criteria[{j}]") for j, c in enumerate(e.criteria))
+        out.append(Entry(e.name, path.resolve().parent / e.scenario, e.controller, seeds, sets, parsed))
     return out
 
 
