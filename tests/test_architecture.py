@@ -101,3 +101,13 @@ def test_the_loop_is_short_and_knows_no_feature():
     assert len(src.splitlines()) <= 45
     for word in ("radar", "flocking", "danger", "arena", "relaxation", "getattr", "hasattr", "isinstance"):
         assert word not in src
+
+
+def test_tests_mirror_the_package():
+    """tests/<sub>/ exists only for a subpackage sumo_avoid/<sub>/; every subpackage that holds code
+    has its folder of tests (top-level modules such as cli.py are tested in tests/ itself)."""
+    tests = PKG.parent / "tests"
+    subpackages = {d.name for d in PKG.iterdir() if (d / "__init__.py").exists()}
+    folders = {d.name for d in tests.iterdir() if d.is_dir() and any(d.glob("test_*.py"))}
+    assert folders <= subpackages, f"test folders without a subpackage: {sorted(folders - subpackages)}"
+    assert subpackages - folders <= {"scenario"}, f"subpackages without tests: {sorted(subpackages - folders)}"

@@ -30,7 +30,7 @@ How it is computed, all steps at once (no loop over steps except where a step's 
   join egos whose nearest neighbour is that close, so only those are searched.
 * Per-step and per-cluster sums with ``np.bincount`` over the (step, id)-sorted rows, which adds in
   row order whatever the labels: with the same clusters and distances, the same floats as the
-  former loop over steps (tests/test_order.py keeps it as the reference).
+  former loop over steps (tests/metrics/test_order.py keeps it as the reference).
 """
 from __future__ import annotations
 

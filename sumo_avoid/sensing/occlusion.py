@@ -16,7 +16,7 @@ computation (:func:`scan`).
 
 The arithmetic is written operation for operation like the numpy formulation it replaced (same
 expressions, same order, first minimum on ties), so the detections are bit-identical to it
-(checked on the benchmark's scans and random scenes in tests/test_radar.py). numba was chosen
+(checked on the benchmark's scans and random scenes in tests/sensing/test_radar.py). numba was chosen
 because the numpy version spent 7.8 ms per scan of 100 egos on ~150 array operations over small
 per-ego arrays (the radar benchmark's largest own cost); this loop does the same work in a
 fraction of that. Compiled on first use and cached on disk (``cache=True``).
@@ -232,7 +232,7 @@ def candidates(spos, fwd, centre, radius, rows, max_range, cos_half, sin_half):
 
     A sweep along the axis the targets spread most on: targets sorted by that coordinate, each ego
     tests only those within ``max_range`` + the largest radius of it (a superset of the exact test,
-    which then runs as written in tests/radar_reference.py's k-d tree version)."""
+    which then runs as written in tests/sensing/radar_reference.py's k-d tree version)."""
     E, N = spos.shape[0], centre.shape[0]
     if E == 0 or N == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)

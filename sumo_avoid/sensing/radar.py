@@ -36,7 +36,7 @@ reflections per target, elevation. ``Detections.target`` (the true id) is for ev
 
 Steps 5-7 are numpy here; the footprints, step 1 (a sweep along one axis instead of a k-d tree) and
 steps 2-4 run in compiled loops over egos, :mod:`.occlusion` (numba), bit-identical to the numpy /
-k-d tree formulation they replaced (kept as the reference in tests/radar_reference.py).
+k-d tree formulation they replaced (kept as the reference in tests/sensing/radar_reference.py).
 """
 from __future__ import annotations
 

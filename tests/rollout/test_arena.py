@@ -16,7 +16,7 @@ from sumo_avoid.rollout import runner
 from sumo_avoid.rollout.arena import outside_distance, random_positions, square
 from sumo_avoid.scenario import spec as scenario
 
-SCN = pathlib.Path(__file__).resolve().parents[1] / "scenarios"
+SCN = pathlib.Path(__file__).resolve().parents[2] / "scenarios"
 FLOCK_KEYS = ("phi_corr", "phi_coll", "phi_wall", "v_vel", "n_disc", "n_min", "mu_speed", "mu_coll", "mu_disc",
               "mu_cluster", "mu_wall", "mu_corr", "mu", "mean_nn_dist_m", "collisions")
 

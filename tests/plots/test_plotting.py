@@ -14,7 +14,7 @@ from sumo_avoid.plots.trajectories import (
 )
 from sumo_avoid.sumo.road import Road
 
-NETS = pathlib.Path(__file__).resolve().parents[1] / "nets"
+NETS = pathlib.Path(__file__).resolve().parents[2] / "nets"
 COLUMNS = ["step", "time_s", "id", "is_ego", "x", "y", "vx", "vy", "speed", "heading", "length", "width"]
 
 

@@ -22,7 +22,7 @@ from sumo_avoid.cli import main
 from sumo_avoid.studies import batch, ledger, worker
 from sumo_avoid.studies.worker import run_one
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 OVERTAKING = ROOT / "scenarios" / "overtaking.toml"
 SEGFAULT_NET = ROOT / "tests" / "data" / "segfault_net.toml"  # a real input that segfaults SUMO 1.28 on load
 SHORT = ["sim.duration_s=5", "output.plots=false"]

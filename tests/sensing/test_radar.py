@@ -312,7 +312,7 @@ def _random_scene(rng, n_vehicles, n_egos, n_obstacles, dense=False):
 
 @pytest.mark.parametrize("mount", ["front", "rear"])
 def test_kernel_is_bit_identical_to_the_numpy_reference(mount):
-    """sensors/occlusion.py (numba) against the numpy formulation it replaced (tests/radar_reference.py):
+    """sensors/occlusion.py (numba) against the numpy formulation it replaced (tests/sensing/radar_reference.py):
     the same detections, the same values to the last bit, on 150 random scenes (vehicles of random
     sizes and headings, convex obstacles, a 150 deg and a 60 deg field of view) and 20 dense jams."""
     rng = np.random.default_rng(11)

@@ -180,7 +180,7 @@ def test_the_example_controller_in_the_docs_runs_through_the_loop():
     import pathlib
     import re
 
-    doc = (pathlib.Path(__file__).resolve().parents[1] / "docs" / "writing_a_controller.md").read_text()
+    doc = (pathlib.Path(__file__).resolve().parents[2] / "docs" / "writing_a_controller.md").read_text()
     code = re.findall(r"```python\n(.*?)```", doc, re.S)[0]
     ns: dict = {}
     exec(compile(code, "writing_a_controller.md", "exec"), ns)

@@ -7,7 +7,7 @@ import pytest
 from sumo_avoid.core.config import ScenarioError
 from sumo_avoid.studies import batch, suite
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 SCN = (ROOT / "scenarios" / "crash_straight.toml").as_posix()
 
 BATCH_CASES = [

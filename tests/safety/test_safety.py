@@ -89,7 +89,7 @@ def test_params_validation():
 
 
 def test_scenario_keys(tmp_path):
-    src = (scenario.pathlib.Path(__file__).parent.parent / "scenarios" / "radar_brake.toml")
+    src = (scenario.pathlib.Path(__file__).resolve().parents[2] / "scenarios" / "radar_brake.toml")
     scn = scenario.load(src, ["radar.max_range_m=80", "safety.warning_s=4.0"])
     assert scn.spec.ego.sensor == "radar" and scn.spec.ego.safety == "danger_time"
     assert scn.spec.radar.max_range_m == 80.0 and scn.spec.safety.warning_s == 4.0

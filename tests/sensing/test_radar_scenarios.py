@@ -8,7 +8,7 @@ from sumo_avoid import outputs as evaluate
 from sumo_avoid.rollout import runner
 from sumo_avoid.scenario import spec as scenario
 
-SCN = pathlib.Path(__file__).resolve().parent.parent / "scenarios"
+SCN = pathlib.Path(__file__).resolve().parents[2] / "scenarios"
 
 
 def radar_brake(tmp_path, speed_mps: float, safety: str):

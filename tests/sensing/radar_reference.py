@@ -1,5 +1,5 @@
 """The numpy formulation of the radar's occlusion step that sumo_avoid/sensors/occlusion.py (numba)
-replaced, kept as an independent reference: tests/test_radar.py checks that the kernel's detections
+replaced, kept as an independent reference: tests/sensing/test_radar.py checks that the kernel's detections
 are bit-identical to this one on random scenes and on a dense-traffic scene. Vectorised over all
 egos and targets: candidates padded into (E, T) blocks, angular intervals, sectors owned by the
 target their middle ray hits first, nearest visible point at owned sector ends or special angles.

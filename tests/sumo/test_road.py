@@ -13,7 +13,7 @@ from sumo_avoid.core.polyline import (
 )
 from sumo_avoid.sumo.road import Road
 
-NETS = pathlib.Path(__file__).resolve().parents[1] / "nets"
+NETS = pathlib.Path(__file__).resolve().parents[2] / "nets"
 
 
 @pytest.fixture(scope="module")

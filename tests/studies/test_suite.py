@@ -8,7 +8,7 @@ from sumo_avoid.cli import main
 from sumo_avoid.core.config import ScenarioError
 from sumo_avoid.studies.suite import Criterion
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 OVERTAKING = ROOT / "scenarios" / "overtaking.toml"
 
 

@@ -9,7 +9,7 @@ import pytest
 from sumo_avoid.cli import main
 from sumo_avoid.studies import batch, ledger
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 OVERTAKING = ROOT / "scenarios" / "overtaking.toml"
 SHORT = ["sim.duration_s=5", "output.plots=false"]  # no PNGs: the report draws them from trajectories.csv
 
