@@ -47,6 +47,22 @@ def polyline_project(path, point) -> float:
     return float(_cumlen(p)[k] + t[k] * np.sqrt(l2[k]))
 
 
+def polyline_project_many(path, points) -> np.ndarray:
+    """Arc lengths (N,) of the points of the polyline nearest to each of ``points`` (N, 2)."""
+    p = _as_path(path)
+    q = np.asarray(points, dtype=float).reshape(-1, 2)
+    if len(p) == 1 or len(q) == 0:
+        return np.zeros(len(q))
+    a, d = p[:-1], p[1:] - p[:-1]
+    l2 = np.einsum("ij,ij->i", d, d)
+    rel = q[:, None, :] - a[None]  # (N, S, 2)
+    t = np.clip(np.einsum("nsk,sk->ns", rel, d) / np.where(l2 > 0, l2, 1.0), 0.0, 1.0) * (l2 > 0)
+    gap = rel - t[..., None] * d[None]
+    k = np.argmin(np.einsum("nsk,nsk->ns", gap, gap), axis=1)
+    rows = np.arange(len(q))
+    return _cumlen(p)[k] + t[rows, k] * np.sqrt(l2[k])
+
+
 def route_segments(paths):
     """The egos' route paths as padded segment arrays for :func:`route_directions`: (rows with a
     path, segment starts (P, S, 2), segment vectors (P, S, 2), squared lengths (P, S)); NaN pads."""

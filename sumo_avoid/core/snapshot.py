@@ -6,7 +6,9 @@ SUMO's front-bumper position and compass angle are converted once, in :mod:`sumo
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
 
 import numpy as np
 
@@ -30,6 +32,7 @@ class Snapshot:
     width: np.ndarray  # (N,) m
     is_ego: np.ndarray  # (N,) bool, vehicles driven by the plug-in
     index: dict = field(default_factory=dict, compare=False, repr=False)  # id -> row
+    signals: Mapping[str, str] = field(default_factory=dict)  # traffic light id -> state string ('rGyG...')
 
     def __post_init__(self):
         n = len(self.ids)
@@ -40,6 +43,7 @@ class Snapshot:
         object.__setattr__(self, "is_ego", _frozen(self.is_ego, bool).reshape(n))
         object.__setattr__(self, "ids", tuple(self.ids))
         object.__setattr__(self, "index", {vid: i for i, vid in enumerate(self.ids)})
+        object.__setattr__(self, "signals", MappingProxyType(dict(self.signals)))
 
     @property
     def n(self) -> int:
@@ -54,6 +58,7 @@ class Snapshot:
         return np.flatnonzero(self.is_ego)
 
     @staticmethod
-    def empty(time_s: float = 0.0) -> "Snapshot":
+    def empty(time_s: float = 0.0, signals: Mapping[str, str] | None = None) -> "Snapshot":
         z = np.zeros(0)
-        return Snapshot(time_s, (), np.zeros((0, 2)), np.zeros((0, 2)), z, z, z, np.zeros(0, bool))
+        return Snapshot(time_s, (), np.zeros((0, 2)), np.zeros((0, 2)), z, z, z, np.zeros(0, bool),
+                        signals=signals or {})

@@ -16,11 +16,26 @@ from sumo_avoid.core.snapshot import Snapshot
 
 
 @dataclass(frozen=True)
+class RouteLink:
+    """A junction link the ego's route passes (from the net, static): where its stop line is on
+    the ego's reference path and which signal, if any, controls it."""
+
+    s_stop_m: float  # arc length along EgoTask.path of the stop line (end of the incoming lane), m
+    junction: str
+    tls: str = ""  # traffic light id, "" = not signalised
+    link_index: int = -1  # index into the light's state string (SUMO linkIndex)
+    state: str = ""  # the connection's static right of way in the net: M major, m minor, = equal, s stop, ...
+    direction: str = ""  # s straight, l left, r right, t turn, L/R partly left/right
+
+
+@dataclass(frozen=True)
 class EgoTask:
     vid: str
     goal: np.ndarray  # (2,) m
     path: np.ndarray  # (P, 2) reference polyline along the ego's route, m
     cruise_speed_mps: float
+    links: tuple[RouteLink, ...] = ()  # junction links along the path, in route order
+    speed_limits: np.ndarray | None = None  # (K, 2) [s where a lane piece starts, its speed limit], m, m/s
 
 
 @dataclass(frozen=True)

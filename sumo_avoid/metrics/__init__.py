@@ -3,6 +3,7 @@ controller's own). Each is a :class:`~sumo_avoid.metrics.base.Metric`; later one
 from sumo_avoid.core.registry import Registry
 from sumo_avoid.metrics.base import clean
 from sumo_avoid.metrics.flocking import FlockingOrder
+from sumo_avoid.metrics.rules import RuleViolations
 from sumo_avoid.metrics.standard import (
     Collisions,
     MinGap,
@@ -22,8 +23,9 @@ METRICS.register("phi_wall", PhiWall)
 METRICS.register("plugin_stats", PluginStats)
 METRICS.register("motion", Motion)
 METRICS.register("flocking", FlockingOrder)
+METRICS.register("rules", RuleViolations)
 
-STANDARD = ("run", "collisions", "min_gap", "phi_coll", "phi_wall", "plugin_stats", "motion")
+STANDARD = ("run", "collisions", "min_gap", "phi_coll", "phi_wall", "plugin_stats", "motion", "rules")
 
 
 def compute(run, names=STANDARD) -> dict:

@@ -4,7 +4,7 @@ Choices made here (data, so the loop never asks):
 
 * the controller is ``ego.controller`` (:data:`sumo_avoid.control.CONTROLLERS`), built with the
   scenario's ``[controllers.NAME]`` parameters and the controller's random stream ``default_rng(seed)``;
-* the layers: ``ego.safety`` (:data:`sumo_avoid.safety.LAYERS`, "none" = no layer); with a radar
+* the layers: ``ego.rules`` (:data:`sumo_avoid.safety.RULES`, default "traffic") first, then ``ego.safety`` (:data:`sumo_avoid.safety.LAYERS`, "none" = no layer); with a radar
   on board (``ego.sensor = "radar"``) and no layer, the danger-time layer still runs as a monitor
   (its counters in metrics.json, the command untouched), as before the plug-ins;
 * the sensor is ``ego.sensor`` (:data:`sumo_avoid.sensing.SENSORS`); it carries a front radar
@@ -21,7 +21,7 @@ from sumo_avoid.control import CONTROLLERS
 from sumo_avoid.core.interfaces import Actuator, Context, Controller, Layer, Sensor
 from sumo_avoid.core.types import EgoTask
 from sumo_avoid.metrics import STANDARD
-from sumo_avoid.safety import LAYERS
+from sumo_avoid.safety import LAYERS, RULES
 from sumo_avoid.sensing import SENSORS
 
 
@@ -62,6 +62,8 @@ def controller_for(scn, ctx: Context) -> Controller:
 def assemble(scn, ctx: Context, controller: Controller) -> Stack:
     spec = scn.spec
     layers = []
+    if spec.ego.rules != "none":
+        layers.append(RULES[spec.ego.rules].factory(spec.rules, ctx))
     if spec.ego.safety != "none":
         layers.append(LAYERS[spec.ego.safety].factory(spec.safety, ctx, enforce=True))
     elif spec.ego.sensor == "radar":

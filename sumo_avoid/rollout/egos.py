@@ -19,6 +19,7 @@ class EgoBook:
         self.uses_goals = uses_goals
         self.goals: dict[str, tuple[float, float]] = {}  # ego id -> goal (x, y), m (egos with a goal)
         self.active: dict[str, EgoTask] = {}  # driven now, in take-over order
+        self.tasks: dict[str, EgoTask] = {}  # every ego taken over (for the metrics)
         self.finished: set[str] = set()
 
     def new(self, departed) -> list[str]:
@@ -27,12 +28,13 @@ class EgoBook:
 
     def take_over(self, sim, vid: str) -> EgoTask:
         info = sim.take_over(vid)
-        path = self.road.route_path(list(info.route_edges), depart_lane=info.lane_index)
+        path, links, limits = self.road.route(list(info.route_edges), depart_lane=info.lane_index)
         goal = np.asarray(self.goal if self.goal is not None else path[-1], float)
         if self.uses_goals:
             self.goals[vid] = (float(goal[0]), float(goal[1]))
-        task = EgoTask(vid, goal, path, self.cruise_speed_mps)
+        task = EgoTask(vid, goal, path, self.cruise_speed_mps, links, limits)
         self.active[vid] = task
+        self.tasks[vid] = task
         return task
 
     def retire(self, sim, snap: Snapshot) -> list[str]:

@@ -21,8 +21,14 @@ class Recorder:
         self._chunks: list[tuple] = []
         self._sumo_events: list[dict] = []
         self._sumo_last: dict[tuple[str, str], int] = {}
+        self._signals: list[tuple[float, str, str]] = []
+        self._signal_now: dict[str, str] = {}
 
     def record(self, step: int, snap: Snapshot) -> None:
+        for tls, state in snap.signals.items():
+            if self._signal_now.get(tls) != state:
+                self._signal_now[tls] = state
+                self._signals.append((snap.time_s, tls, state))
         if snap.n == 0:
             return
         keep = snap.is_ego.copy()
@@ -63,6 +69,10 @@ class Recorder:
             "length": np.concatenate([c[7] for c in self._chunks]),
             "width": np.concatenate([c[8] for c in self._chunks]),
         })
+
+    def signals(self) -> pd.DataFrame:
+        """Traffic light states, one row per change (and the first state of each light)."""
+        return pd.DataFrame(self._signals, columns=["time_s", "tls", "state"])
 
     def sumo_events(self) -> pd.DataFrame:
         return pd.DataFrame(self._sumo_events, columns=["step", "time_s", "a", "b", "collider", "victim", "type", "lane"])

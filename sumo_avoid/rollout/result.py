@@ -29,6 +29,8 @@ class RunResult:
     stats: dict  # the plug-ins' counters (controller, layers, sensor, actuator)
     timings: dict = field(default_factory=dict)
     tables: dict = field(default_factory=dict)  # name -> DataFrame, written as NAME.csv (e.g. detections)
+    tasks: dict = field(default_factory=dict)  # ego id -> EgoTask (route path, junction links, speed limits)
+    signals: pd.DataFrame | None = None  # traffic light states: time_s, tls, state (a row per change)
     _memo: dict = field(default_factory=dict, compare=False, repr=False)
 
     @property

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import pathlib
 import sys
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -19,8 +20,9 @@ from sumo_avoid.actuation.params import ActuatorConfig
 from sumo_avoid.control import CONTROLLERS
 from sumo_avoid.core.config import ScenarioError, build, describe, field_doc
 from sumo_avoid.metrics import METRICS
-from sumo_avoid.safety import LAYERS
+from sumo_avoid.safety import LAYERS, RULES
 from sumo_avoid.safety.danger_time import DangerTimeParams
+from sumo_avoid.safety.rules import RulesParams
 from sumo_avoid.sensing import SENSORS
 from sumo_avoid.sensing.radar import RadarParams
 from sumo_avoid.sumo.road import Road
@@ -58,6 +60,8 @@ class EgoConfig:
     controller: str = field_doc("apf_sa", doc="controller name (see `sumo-avoid controllers`)")
     sensor: str = field_doc("truth", doc="what controllers see: 'truth' (ground truth) or 'radar' ([radar] table)")
     safety: str = field_doc("none", doc="safety layer over the controller: 'none' or 'danger_time' ([safety] table)")
+    rules: str = field_doc("traffic", doc="traffic rules layer: 'traffic' (signals, road speed; [rules] table) "
+                                          "or 'none' (a study of rule-free controllers)")
     cruise_speed_mps: float = field_doc(20.0, doc="desired cruising speed, m/s")
     goal: tuple[float, ...] | None = field_doc(None, signed=True,
                                                doc="goal [x, y] in net coordinates, m; default: end of each ego's route")
@@ -126,6 +130,7 @@ class ScenarioSpec:
     controllers: dict = field_doc(default_factory=dict, doc="[controllers.NAME] tables: parameters of controller NAME")
     radar: RadarParams = field_doc(RadarParams(), doc="[radar] table (docs/radar.md)")
     safety: DangerTimeParams = field_doc(DangerTimeParams(), doc="[safety] table: danger-time levels (docs/radar.md)")
+    rules: RulesParams = field_doc(RulesParams(), doc="[rules] table: traffic rules layer (SPEC §5)")
     arena: ArenaConfig | None = field_doc(None, doc="[arena] table: spawn a flock in a square arena (flocking)")
     obstacles: tuple[ObstacleConfig, ...] = field_doc((), doc="[[obstacles]] static convex polygons (id, shape)")
 
@@ -210,6 +215,7 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     for key, value, names in (("ego.controller", spec.ego.controller, CONTROLLERS.names()),
                               ("ego.sensor", spec.ego.sensor, SENSORS.names()),
                               ("ego.safety", spec.ego.safety, ["none", *LAYERS.names()]),
+                              ("ego.rules", spec.ego.rules, ["none", *RULES.names()]),
                               ("actuator.mode", spec.actuator.mode, ACTUATORS.names()),
                               *((f"output.metrics[{i}]", m, METRICS.names()) for i, m in enumerate(spec.output.metrics))):
         if value not in names:
@@ -232,6 +238,7 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     net = existing(spec.sim.net, "sim.net", "SUMO network")
     routes = tuple(existing(r, f"sim.routes[{i}]", "SUMO route") for i, r in enumerate(spec.sim.routes))
     adds = tuple(existing(r, f"sim.additional[{i}]", "SUMO additional") for i, r in enumerate(spec.sim.additional))
+    _check_ego_ids(spec.ego.ids, routes + adds, file)
     if spec.ego.goal is not None:
         try:
             road = Road.from_net_file(net)
@@ -242,6 +249,33 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
             raise ScenarioError(file, "ego.goal", f"a point on the network's drivable area ({off:.1f} m off it)",
                                 list(spec.ego.goal))
     return Scenario(spec, path, net, routes, adds, params)
+
+
+def _defined_vehicles(files) -> tuple[set[str], set[str]]:
+    """(vehicle and trip ids, flow ids) defined in SUMO route/additional files; a file that is not
+    XML is left for SUMO to reject (with its own reason) when the run starts."""
+    ids, flows = set(), set()
+    for f in files:
+        try:
+            for _, el in ET.iterparse(f):
+                if el.tag in ("vehicle", "trip") and "id" in el.attrib:
+                    ids.add(el.attrib["id"])
+                elif el.tag == "flow" and "id" in el.attrib:
+                    flows.add(el.attrib["id"])
+                el.clear()
+        except (ET.ParseError, OSError):
+            continue
+    return ids, flows
+
+
+def _check_ego_ids(ego_ids, files, file: str) -> None:
+    """Every ego id is a vehicle or trip of the route files (or a vehicle of a flow, FLOW.N)."""
+    if not ego_ids:
+        return
+    ids, flows = _defined_vehicles(files)
+    for i, vid in enumerate(ego_ids):
+        if vid not in ids and vid.rpartition(".")[0] not in flows:
+            raise ScenarioError(file, f"ego.ids[{i}]", "the id of a <vehicle> or <trip> in the route files", vid)
 
 
 def with_spec(scn: Scenario, **changes) -> Scenario:

@@ -29,6 +29,7 @@ from sumo_avoid.core.polyline import (
     polyline_point_at,
     polyline_project,
 )
+from sumo_avoid.core.types import RouteLink
 
 
 def _dedupe(points: np.ndarray, tol: float = 1e-6) -> np.ndarray:
@@ -202,7 +203,14 @@ class Road:
         return polyline_point_at(shape, pos_m * factor)
 
     def route_path(self, edge_ids, depart_lane: int | None = None, arrival_lane: int | None = None) -> np.ndarray:
-        """Reference polyline (P,2) along consecutive normal edges, joined by internal lanes.
+        """Reference polyline (P,2) along the route (:meth:`route`)."""
+        return self.route(edge_ids, depart_lane, arrival_lane)[0]
+
+    def route(self, edge_ids, depart_lane: int | None = None,
+              arrival_lane: int | None = None) -> tuple[np.ndarray, tuple[RouteLink, ...], np.ndarray]:
+        """Reference polyline (P,2) along consecutive normal edges, joined by internal lanes, and
+        the junction links it passes (:class:`RouteLink`: stop line arc length, signal, right of way),
+        and the speed limits along it ((K, 2): arc length where a lane piece starts, its speed, m/s).
 
         On every edge one lane is used that has a connection to the next edge (the one
         nearest to the lane we entered on, or to ``depart_lane`` on the first edge). If the
@@ -214,6 +222,11 @@ class Road:
         if not edges:
             raise ValueError("empty route")
         pieces: list[np.ndarray] = []
+        links: list[RouteLink] = []
+        limits: list[tuple[float, float]] = []
+
+        def here() -> float:
+            return polyline_length(_dedupe(np.concatenate(pieces), tol=1e-3)) if pieces else 0.0
         entry = depart_lane
         for k, e in enumerate(edges):
             lanes = e.getLanes()
@@ -233,6 +246,7 @@ class Road:
             exit_idx = int(np.clip(exit_idx, 0, len(lanes) - 1))
             entry_idx = exit_idx if entry is None else int(np.clip(entry, 0, len(lanes) - 1))
             exit_shape = np.asarray(lanes[exit_idx].getShape(), float)
+            limits.append((here(), float(lanes[exit_idx].getSpeed())))
             if entry_idx != exit_idx:
                 entry_shape = np.asarray(lanes[entry_idx].getShape(), float)
                 L = polyline_length(exit_shape)
@@ -242,12 +256,21 @@ class Road:
             else:
                 pieces.append(exit_shape)
             if conn is not None:
-                pieces.extend(self._via_shapes(conn))
+                links.append(self._link(conn, here()))
+                for shape, speed in self._via_lanes(conn):
+                    limits.append((here(), speed))
+                    pieces.append(shape)
                 entry = conn.getToLane().getIndex()
-        return _dedupe(np.concatenate(pieces), tol=1e-3)
+        return _dedupe(np.concatenate(pieces), tol=1e-3), tuple(links), np.array(limits, float).reshape(-1, 2)
 
-    def _via_shapes(self, conn) -> list[np.ndarray]:
-        """Shapes of the chain of internal lanes of a connection (possibly split in several)."""
+    @staticmethod
+    def _link(conn, s_stop_m: float) -> RouteLink:
+        tls = conn.getTLSID() or ""
+        return RouteLink(float(s_stop_m), conn.getFrom().getToNode().getID(), tls,
+                         int(conn.getTLLinkIndex()) if tls else -1, conn.getState() or "", conn.getDirection() or "")
+
+    def _via_lanes(self, conn) -> list[tuple[np.ndarray, float]]:
+        """(shape, speed limit) of the chain of internal lanes of a connection (possibly split in several)."""
         out = []
         target = conn.getToLane().getID()
         via = conn.getViaLaneID()
@@ -255,7 +278,7 @@ class Road:
         while via and guard < 32:
             guard += 1
             lane = self._net.getLane(via)
-            out.append(np.asarray(lane.getShape(), float))
+            out.append((np.asarray(lane.getShape(), float), float(lane.getSpeed())))
             outs = lane.getOutgoing()
             if not outs:
                 break

@@ -89,6 +89,8 @@ class SumoSim:
         self._static_key: tuple[str, ...] | None = None  # read(): libsumo's ids the cached static part is for
         self._static: tuple = ()
         self._subscribe_new(libsumo.vehicle.getIDList())
+        for tls in libsumo.trafficlight.getIDList():  # every signal's state, read with the vehicles
+            libsumo.trafficlight.subscribe(tls, [libsumo.constants.TL_RED_YELLOW_GREEN_STATE])
 
     # --- reading ---------------------------------------------------------------------------
     def _subscribe_new(self, ids) -> None:
@@ -109,8 +111,9 @@ class SumoSim:
                             np.array([v in self._egos for v in ids], dtype=bool))
         ids, dims, is_ego = self._static
         n = len(ids)
+        signals = self._signals()
         if n == 0:
-            return Snapshot.empty(self.time_s)
+            return Snapshot.empty(self.time_s, signals)
         rows = res.values() if n == len(key) else [res[v] for v in ids]
         c = libsumo.constants
         P, A, S = c.VAR_POSITION, c.VAR_ANGLE, c.VAR_SPEED
@@ -120,7 +123,12 @@ class SumoSim:
         direction = np.column_stack([np.cos(heading), np.sin(heading)])
         centre = flat[:, :2] - direction * (dims[:, :1] / 2.0)
         return Snapshot(self.time_s, ids, centre, direction * flat[:, 3:4], heading,
-                        dims[:, 0], dims[:, 1], is_ego)
+                        dims[:, 0], dims[:, 1], is_ego, signals=signals)
+
+    @staticmethod
+    def _signals() -> dict[str, str]:
+        state = libsumo.constants.TL_RED_YELLOW_GREEN_STATE
+        return {tls: r[state] for tls, r in libsumo.trafficlight.getAllSubscriptionResults().items()}
 
     @property
     def time_s(self) -> float:

@@ -1,0 +1,151 @@
+"""Traffic rules as a layer (SPEC §5): any controller's command is limited so that the ego stops
+for signals and keeps the speed the road ahead allows. ``ego.rules = "none"`` switches it off.
+
+Per ego and step, with s the arc length of the ego's front bumper projected on its route path
+(:class:`~sumo_avoid.core.types.EgoTask`: path, junction links, lane speed limits):
+
+* **Signals.** For every signalised link ahead within ``lookahead_m`` (its state from the
+  snapshot's ``signals``, index ``link_index``): 'r' / 'u' (red, red-yellow) -> stop; 'y' -> stop
+  when the stop is comfortable, v^2 / (2 b_comf) <= distance - margin, decided once at the onset
+  of the yellow (no flip-flop while braking) and else go on; 'G' / 'g' / 'o' / 'O' -> go (yielding
+  on 'g' is the right-of-way part, not done yet). A stop caps the speed at the braking curve
+  sqrt(2 b_comf (d - margin)), d the distance of the front bumper to the stop line, so the ego
+  stops ``stop_margin_m`` before the line.
+* **Speed for the road ahead.** v <= sqrt(v_i^2 + 2 b_comf (s_i - s)) for every lane piece i
+  starting within ``lookahead_m`` at s_i with speed limit v_i x ``speed_factor`` (SUMO's
+  speedFactor idea; junction internal lanes carry netconvert's turning speeds). Off by default
+  (``speed_factor`` unset) for now: on left_turn, seed 1, the 9.55 m/s cap in the junction
+  shifts APF-SA's timing by a fraction of a second and the ego then stalls for good beside the
+  centre line of C2W after being passed (measured: goal not reached in 90 s; reached at 38 s
+  without the cap). That stall is the controller's (issue "drive any SUMO network"), and the cap
+  becomes the default with the road-frame controllers. The curvature speed sqrt(a_lat / |kappa|)
+  joins this envelope with the route frame (not yet wired).
+
+The command (desired velocity, m/s) keeps its direction; only its length is capped. The stop
+line works as a virtual obstacle that no controller can drive through; SPEC §5 hands it to the
+controller as one, which a potential-field controller would also steer around (the departure is
+deliberate: a stop line is not something to swerve past). Counters: ``rules_signal_stops``
+(episodes of an ego held by a signal), ``rules_speed_caps`` (steps where the road speed capped
+the command).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from sumo_avoid.core.config import field_doc
+from sumo_avoid.core.polyline import polyline_project
+from sumo_avoid.core.types import EgoTask
+
+STOP, GO = "stop", "go"
+RED = frozenset("ru")
+
+
+@dataclass(frozen=True)
+class RulesParams:
+    comfort_decel_mps2: float = field_doc(3.0, positive=True, doc="b_comf: comfortable braking for signals "
+                                                                   "and the road ahead, m/s^2 (SPEC §5)")
+    stop_margin_m: float = field_doc(1.0, doc="stop the front bumper this far before a stop line, m")
+    speed_factor: float | None = field_doc(None, positive=True,
+                                           doc="lane speed limit x this = highest speed; default: not enforced "
+                                               "(docs: enforcing it stalls APF-SA on left_turn today)")
+    lookahead_m: float = field_doc(250.0, positive=True, doc="signals and speed limits this far ahead count, m")
+
+
+@dataclass
+class _Ego:
+    task: EgoTask
+    s_m: float = 0.0
+    yellow: dict | None = None  # link position in task.links -> STOP | GO decided at the yellow's onset
+    held: bool = False
+    stopped_at: set = None  # stop lines (s) the ego was held at
+
+
+def signal_char(signals, link) -> str:
+    """The state character of a signalised link ('' if not signalised or unknown)."""
+    state = signals.get(link.tls, "") if link.tls else ""
+    return state[link.link_index] if 0 <= link.link_index < len(state) else ""
+
+
+def road_speed_cap(task: EgoTask, s_m: float, p: RulesParams) -> float:
+    """Highest speed at arc length ``s_m`` from which every lane speed limit ahead (and the limit
+    of the piece the ego is on) can be met braking at b_comf."""
+    lim = task.speed_limits
+    if p.speed_factor is None or lim is None or len(lim) == 0:
+        return math.inf
+    b = p.comfort_decel_mps2
+    starts, v = lim[:, 0], lim[:, 1] * p.speed_factor
+    here = max(0, int(np.searchsorted(starts, s_m, side="right")) - 1)
+    ahead = (starts > s_m) & (starts <= s_m + p.lookahead_m)
+    caps = np.sqrt(v[ahead] ** 2 + 2.0 * b * (starts[ahead] - s_m))
+    return float(min(v[here], caps.min() if caps.size else math.inf))
+
+
+class TrafficRulesLayer:
+    """Traffic rules: stop for red and stoppable yellow lights, keep the road's speed ahead."""
+
+    needs_scans = False
+
+    def __init__(self, params: RulesParams, ctx=None):
+        self.p = params
+        self._egos: dict[str, _Ego] = {}
+        self._stops = 0
+        self._caps = 0
+
+    def add_ego(self, task: EgoTask) -> None:
+        self._egos[task.vid] = _Ego(task, yellow={}, stopped_at=set())
+
+    def _signal_cap(self, e: _Ego, signals, v: float) -> float:
+        p, cap = self.p, math.inf
+        for k, link in enumerate(e.task.links):
+            d = link.s_stop_m - e.s_m - p.stop_margin_m
+            if not link.tls or link.s_stop_m < e.s_m or d > p.lookahead_m:
+                continue
+            c = signal_char(signals, link)
+            if c != "y":
+                e.yellow.pop(k, None)
+            if c == "y" and k not in e.yellow:
+                e.yellow[k] = STOP if v * v / (2.0 * p.comfort_decel_mps2) <= d else GO
+            if c in RED or e.yellow.get(k) == STOP:
+                cap = min(cap, math.sqrt(2.0 * p.comfort_decel_mps2 * max(d, 0.0)))
+        return cap
+
+    def filter(self, obs, command: np.ndarray) -> np.ndarray:
+        snap = obs.snapshot
+        out = np.array(command, dtype=float, copy=True)
+        for i, vid in enumerate(obs.ego_ids):
+            e = self._egos.get(vid)
+            if e is None:
+                continue
+            r = obs.ego_rows[i]
+            h = snap.heading[r]
+            front = snap.pos[r] + 0.5 * snap.length[r] * np.array([math.cos(h), math.sin(h)])
+            e.s_m = polyline_project(e.task.path, front)
+            v = abs(float(obs.ego_speed[i]))
+            sig = self._signal_cap(e, snap.signals, v)
+            road = road_speed_cap(e.task, e.s_m, self.p)
+            held = sig < v or sig < 0.5
+            if held and not e.held:  # one episode per stop line, however often the cap binds
+                e.stopped_at.add(self._next_stop(e))
+            e.held = held
+            speed = math.hypot(out[i, 0], out[i, 1])
+            cap = min(sig, road)
+            if speed > cap:
+                self._caps += road < sig
+                out[i] *= cap / speed
+        return out
+
+    def _next_stop(self, e: _Ego) -> float:
+        ahead = [lk.s_stop_m for lk in e.task.links if lk.tls and lk.s_stop_m >= e.s_m]
+        return min(ahead) if ahead else -1.0
+
+    def remove_ego(self, vid: str) -> None:
+        e = self._egos.pop(vid, None)
+        if e is not None:
+            self._stops += len(e.stopped_at)
+
+    def stats(self) -> dict:
+        stops = self._stops + sum(len(e.stopped_at) for e in self._egos.values())
+        return {"rules_signal_stops": stops, "rules_speed_caps": self._caps}
