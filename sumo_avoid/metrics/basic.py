@@ -259,25 +259,27 @@ def motion_summary(traj: pd.DataFrame, goals: dict, goal_tol_m: float) -> dict:
     path_length_m = mean over egos; mean_speed_mps = mean over all ego rows (None without egos).
     Returns ``{"per_ego": {id: {...}}, **aggregates}``.
     """
-    e = traj[traj["is_ego"].astype(bool)].sort_values(["id", "step"], kind="stable")
+    e = traj[traj["is_ego"].astype(bool)]
     per: dict = {}
     if len(e) == 0:
         return {"per_ego": per, "goal_reached": None, "time_to_goal_s": None,
                 "path_length_m": None, "mean_speed_mps": None}
-    ids = e["id"].astype(str).to_numpy(dtype=str)
+    # sorted by (id, step) as sort_values(["id", "step"], kind="stable") would, but on integer codes
+    e = e.iloc[np.lexsort((e["step"].to_numpy(), pd.factorize(e["id"], sort=True)[0]))]
+    inv, uid = pd.factorize(e["id"].astype(str), sort=True)  # code of each row's id (as text), ids sorted
     x, y = e["x"].to_numpy(float), e["y"].to_numpy(float)
     t = e["time_s"].to_numpy(float)
-    same = np.r_[False, ids[1:] == ids[:-1]]
+    same = np.r_[False, inv[1:] == inv[:-1]]
     seg = np.where(same, np.hypot(np.diff(x, prepend=x[0]), np.diff(y, prepend=y[0])), 0.0)
-    uid, inv = np.unique(ids, return_inverse=True)
     goal_xy = np.array([goals.get(i, (np.nan, np.nan)) for i in uid], float).reshape(-1, 2)
     gx, gy = goal_xy[:, 0], goal_xy[:, 1]  # per distinct ego (loop over egos, not rows), m
     within = np.hypot(x - gx[inv], y - gy[inv]) <= goal_tol_m  # False where no goal (NaN)
-    df = pd.DataFrame({"id": ids, "t": t, "seg": seg, "speed": e["speed"].to_numpy(float),
+    df = pd.DataFrame({"id": inv, "t": t, "seg": seg, "speed": e["speed"].to_numpy(float),
                        "t_hit": np.where(within, t, np.nan)})
-    g = df.groupby("id", sort=True)
+    g = df.groupby("id", sort=True)  # on the codes: the groups (and sums) of the ids, in their order
     agg = pd.DataFrame({"t0": g["t"].min(), "path": g["seg"].sum(), "v": g["speed"].mean(),
                         "t_hit": g["t_hit"].min()})
+    agg.index = np.asarray(uid)[agg.index.to_numpy()]
     for vid, row in agg.iterrows():  # one iteration per ego (reporting only)
         has_goal = vid in goals
         reached = bool(np.isfinite(row["t_hit"])) if has_goal else None
