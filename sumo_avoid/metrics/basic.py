@@ -10,13 +10,12 @@ documented with the seed's equation numbers. Units: metres, seconds, radians.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pandas as pd
 
 from sumo_avoid.core.curves import braking_curve_D  # noqa: F401  (SPEC §1 eq. 3; tests and fitness)
 from sumo_avoid.core.geometry import convex_distance, convex_overlap, footprint_corners
+from sumo_avoid.metrics.pairs import Rows
 
 __all__ = [
     "collision_events", "min_gap_m", "phi_coll", "phi_wall",
@@ -24,65 +23,28 @@ __all__ = [
 ]
 
 _EVENT_COLS = ["step", "time_s", "a", "b", "x", "y"]
-_MAX_PAIRS_PER_CHUNK = 1_000_000
-
-
-# ---------------------------------------------------------------------------------------------
-# ego-pair enumeration (vectorised; Python loops only over chunks of ~1e6 pairs)
-# ---------------------------------------------------------------------------------------------
-def _sorted_arrays(traj: pd.DataFrame) -> dict:
-    t = traj.sort_values(["step", "id"], kind="stable")
-    out = {c: t[c].to_numpy(dtype=float) for c in ("x", "y", "heading", "length", "width", "time_s")}
-    out["step"] = t["step"].to_numpy(dtype=np.int64)
-    out["id"] = t["id"].astype(str).to_numpy(dtype=str)
-    out["is_ego"] = t["is_ego"].to_numpy(dtype=bool)
-    return out
-
-
-def _ego_pairs(step: np.ndarray, is_ego: np.ndarray, unordered: bool):
-    """Yield (i, j) row-index arrays of pairs present at the same step, i an ego, j != i.
-
-    ``step`` must be sorted ascending. With ``unordered`` each ego-ego pair appears once (i < j);
-    otherwise both orders appear (the ordered pairs of SPEC eq. 12).
-    """
-    if step.size == 0:
-        return
-    uniq, start, count = np.unique(step, return_index=True, return_counts=True)
-    ego_rows = np.flatnonzero(is_ego)
-    if ego_rows.size == 0:
-        return
-    g = np.searchsorted(uniq, step[ego_rows])
-    npart = count[g]  # partners of each ego row (including itself)
-    cum = np.cumsum(npart)
-    lo = 0
-    while lo < ego_rows.size:
-        base = cum[lo - 1] if lo else 0
-        hi = max(lo + 1, int(np.searchsorted(cum, base + _MAX_PAIRS_PER_CHUNK, side="right")))
-        er, c, s0 = ego_rows[lo:hi], npart[lo:hi], start[g[lo:hi]]
-        i = np.repeat(er, c)
-        off = np.arange(c.sum()) - np.repeat(np.cumsum(c) - c, c)
-        j = np.repeat(s0, c) + off
-        keep = j != i
-        if unordered:
-            keep &= ~is_ego[j] | (i < j)
-        yield i[keep], j[keep]
-        lo = hi
-
-
-def _half_diag(length, width):
-    return 0.5 * np.hypot(length, width)  # m, circumscribed-circle radius of a footprint
 
 
 # ---------------------------------------------------------------------------------------------
 # collisions and gaps
 # ---------------------------------------------------------------------------------------------
-def collision_events(traj: pd.DataFrame) -> pd.DataFrame:
+def _half_diag(length, width):
+    return 0.5 * np.hypot(length, width)  # m, circumscribed-circle radius of a footprint
+
+
+def _corners(s: Rows, rows: np.ndarray) -> np.ndarray:
+    return footprint_corners(np.c_[s.x[rows], s.y[rows]], s.heading[rows], s.length[rows], s.width[rows])
+
+
+def collision_events(traj: pd.DataFrame, rows: Rows | None = None) -> pd.DataFrame:
     """Footprint contacts involving at least one ego, one event per pair per contact episode.
 
     Contact = the oriented rectangles (centre x, y; heading; length x width) overlap or touch
     (:func:`sumo_avoid.core.geometry.convex_overlap`, tolerance 1e-9 m). Pairs: ego vs non-ego and
     ego vs ego; pairs of two non-egos are ignored. Broad phase: a pair is tested only when its
-    centre distance <= sum of the half diagonals (circumscribed circles touch).
+    centre distance <= sum of the half diagonals (circumscribed circles touch); the candidates
+    come from a k-d tree search (:mod:`sumo_avoid.metrics.pairs`) within twice the largest half
+    diagonal.
 
     An episode is a run of *consecutive recorded steps* (consecutive in the run's sorted list of
     distinct ``step`` values) with contact; any recorded step without contact (including the
@@ -94,32 +56,27 @@ def collision_events(traj: pd.DataFrame) -> pd.DataFrame:
     """
     if len(traj) == 0:
         return pd.DataFrame(columns=_EVENT_COLS)
-    s = _sorted_arrays(traj)
-    hd = _half_diag(s["length"], s["width"])
-    hits_i, hits_j = [], []
-    for i, j in _ego_pairs(s["step"], s["is_ego"], unordered=True):
-        cd = np.hypot(s["x"][i] - s["x"][j], s["y"][i] - s["y"][j])
-        near = cd <= hd[i] + hd[j] + 1e-9
-        i, j = i[near], j[near]
-        if i.size == 0:
-            continue
-        ci = footprint_corners(np.c_[s["x"][i], s["y"][i]], s["heading"][i], s["length"][i], s["width"][i])
-        cj = footprint_corners(np.c_[s["x"][j], s["y"][j]], s["heading"][j], s["length"][j], s["width"][j])
-        hit = convex_overlap(ci, cj)
-        hits_i.append(i[hit])
-        hits_j.append(j[hit])
-    if not hits_i or sum(h.size for h in hits_i) == 0:
+    s = Rows.of(traj) if rows is None else rows
+    hd = _half_diag(s.length, s.width)
+    i, j = s.pairs_within(2.0 * float(hd.max()) + 1e-9)
+    cd = np.hypot(s.x[i] - s.x[j], s.y[i] - s.y[j])
+    near = cd <= hd[i] + hd[j] + 1e-9
+    i, j = i[near], j[near]
+    if i.size == 0:
         return pd.DataFrame(columns=_EVENT_COLS)
-    i = np.concatenate(hits_i)
-    j = np.concatenate(hits_j)
-    ids = s["id"]
-    swap = ids[j] < ids[i]
-    a = np.where(swap, ids[j], ids[i])
-    b = np.where(swap, ids[i], ids[j])
-    rank = np.searchsorted(np.unique(s["step"]), s["step"][i])  # index among recorded steps
+    hit = convex_overlap(_corners(s, i), _corners(s, j))
+    i, j = i[hit], j[hit]
+    if i.size == 0:
+        return pd.DataFrame(columns=_EVENT_COLS)
+    o = np.lexsort((s.order_pos[j], s.order_pos[i]))  # the former pair order: by ego row, then partner
+    i, j = i[o], j[o]
+    ids_i, ids_j = s.ids[i].astype(str), s.ids[j].astype(str)
+    swap = ids_j < ids_i
+    a = np.where(swap, ids_j, ids_i)
+    b = np.where(swap, ids_i, ids_j)
     c = pd.DataFrame({
-        "step": s["step"][i], "time_s": s["time_s"][i], "a": a, "b": b,
-        "x": 0.5 * (s["x"][i] + s["x"][j]), "y": 0.5 * (s["y"][i] + s["y"][j]), "_rank": rank,
+        "step": s.step[i], "time_s": s.time_s[i], "a": a, "b": b,
+        "x": 0.5 * (s.x[i] + s.x[j]), "y": 0.5 * (s.y[i] + s.y[j]), "_rank": s.rank[i],  # index among recorded steps
     }).sort_values(["a", "b", "_rank"], kind="stable")
     same_pair = (c["a"].to_numpy() == np.roll(c["a"].to_numpy(), 1)) & (
         c["b"].to_numpy() == np.roll(c["b"].to_numpy(), 1))
@@ -129,47 +86,50 @@ def collision_events(traj: pd.DataFrame) -> pd.DataFrame:
     return ev.reset_index(drop=True)
 
 
-def min_gap_m(traj: pd.DataFrame) -> float | None:
+def min_gap_m(traj: pd.DataFrame, rows: Rows | None = None) -> float | None:
     """Smallest footprint-to-footprint distance, m, between an ego and any other vehicle (ego or
     not) present at the same step, over the whole run. 0 when footprints touch/overlap.
 
     Returns None (JSON-friendly) when no ego ever shares a step with another vehicle.
     Exact distances are computed only for pairs whose lower bound (centre distance minus the two
-    half diagonals) is below the best upper bound (centre distance minus the two half widths,
-    floored at 0; the footprint contains the disc of radius width/2 about its centre).
+    half diagonals) is below the best upper bound ``ub`` (the smallest centre distance minus the two
+    half widths, floored at 0; the footprint contains the disc of radius width/2 about its centre).
+    Pairs are searched with a k-d tree (:mod:`sumo_avoid.metrics.pairs`) within a radius r, grown
+    until r >= ub + 2 × the largest half diagonal: then every pair whose lower bound is <= ub, and
+    the pair that sets ub, are among them, so ub and the result are those of all pairs.
     """
     if len(traj) == 0:
         return None
-    s = _sorted_arrays(traj)
-    hd = _half_diag(s["length"], s["width"])
-    hw = 0.5 * s["width"]
-    cands, ub = [], math.inf
-    for i, j in _ego_pairs(s["step"], s["is_ego"], unordered=True):
-        if i.size == 0:
-            continue
-        cd = np.hypot(s["x"][i] - s["x"][j], s["y"][i] - s["y"][j])
-        ub = min(ub, float(np.maximum(cd - hw[i] - hw[j], 0.0).min()))
-        lb = cd - hd[i] - hd[j]
-        cands.append((i, j, lb))
-    if not cands:
-        return None
-    best = ub
-    for i, j, lb in cands:
-        keep = lb <= ub
-        i, j = i[keep], j[keep]
-        if i.size == 0:
-            continue
-        ci = footprint_corners(np.c_[s["x"][i], s["y"][i]], s["heading"][i], s["length"][i], s["width"][i])
-        cj = footprint_corners(np.c_[s["x"][j], s["y"][j]], s["heading"][j], s["length"][j], s["width"][j])
-        d, _, _ = convex_distance(ci, cj)
-        best = min(best, float(d.min()))
-    return best
+    s = Rows.of(traj) if rows is None else rows
+    hd = _half_diag(s.length, s.width)
+    hw = 0.5 * s.width
+    hd_max = float(hd.max())
+    r = 2.0 * hd_max + 1.0
+    while True:
+        i, j = s.pairs_within(r)
+        cd = np.hypot(s.x[i] - s.x[j], s.y[i] - s.y[j])
+        if i.size:
+            ub = float(np.maximum(cd - hw[i] - hw[j], 0.0).min())
+            need = ub + 2.0 * hd_max
+            if need <= r or r >= s.extent_m:
+                break
+            r = need
+        elif r >= s.extent_m:  # every pair of every step searched: no ego ever has company
+            return None
+        else:
+            r = 2.0 * r
+    keep = cd - hd[i] - hd[j] <= ub
+    i, j = i[keep], j[keep]
+    if i.size == 0:
+        return ub
+    d, _, _ = convex_distance(_corners(s, i), _corners(s, j))
+    return min(ub, float(d.min()))
 
 
 # ---------------------------------------------------------------------------------------------
 # order parameters (SPEC §1.1)
 # ---------------------------------------------------------------------------------------------
-def phi_coll(traj: pd.DataFrame, dt_s: float, r_coll_m: float = 3.0) -> float:
+def phi_coll(traj: pd.DataFrame, dt_s: float, r_coll_m: float = 3.0, rows: Rows | None = None) -> float:
     """Collision ratio φ_coll (SPEC §1.1, seed eq. 12) from centre distances.
 
     At each step t with N_ego(t) >= 1 egos and N(t) vehicles present:
@@ -180,18 +140,21 @@ def phi_coll(traj: pd.DataFrame, dt_s: float, r_coll_m: float = 3.0) -> float:
     ego) × dt_s; with a constant step dt_s cancels, so this is the mean of f over those steps.
     When every vehicle is an ego, N_ego = N and this is exactly SPEC eq. 12,
     1/(T N (N-1)) ∫ Σ_i Σ_{j≠i} h(r_coll - r_ij) dt. Returns 0.0 if no step has an ego.
+    The close pairs come from a k-d tree search (:mod:`sumo_avoid.metrics.pairs`); an ego-ego
+    pair counts twice (both orders), an ego/non-ego pair once.
     """
     if dt_s <= 0:
         raise ValueError("dt_s must be > 0")
     if len(traj) == 0:
         return 0.0
-    s = _sorted_arrays(traj)
-    uniq, count = np.unique(s["step"], return_counts=True)
-    n_ego = np.bincount(np.searchsorted(uniq, s["step"][s["is_ego"]]), minlength=uniq.size)
-    close = np.zeros(uniq.size)
-    for i, j in _ego_pairs(s["step"], s["is_ego"], unordered=False):
-        hit = np.hypot(s["x"][i] - s["x"][j], s["y"][i] - s["y"][j]) < r_coll_m
-        close += np.bincount(np.searchsorted(uniq, s["step"][i][hit]), minlength=uniq.size)
+    s = Rows.of(traj) if rows is None else rows
+    nu = s.uniq.size
+    count = np.bincount(s.rank, minlength=nu)
+    n_ego = np.bincount(s.rank[s.is_ego], minlength=nu)
+    i, j = s.pairs_within(r_coll_m)
+    hit = np.hypot(s.x[i] - s.x[j], s.y[i] - s.y[j]) < r_coll_m
+    i, j = i[hit], j[hit]
+    close = np.bincount(s.rank[i], minlength=nu) + np.bincount(s.rank[i[s.is_ego[j]]], minlength=nu)
     with_ego = n_ego > 0
     if not with_ego.any():
         return 0.0
@@ -296,25 +259,27 @@ def motion_summary(traj: pd.DataFrame, goals: dict, goal_tol_m: float) -> dict:
     path_length_m = mean over egos; mean_speed_mps = mean over all ego rows (None without egos).
     Returns ``{"per_ego": {id: {...}}, **aggregates}``.
     """
-    e = traj[traj["is_ego"].astype(bool)].sort_values(["id", "step"], kind="stable")
+    e = traj[traj["is_ego"].astype(bool)]
     per: dict = {}
     if len(e) == 0:
         return {"per_ego": per, "goal_reached": None, "time_to_goal_s": None,
                 "path_length_m": None, "mean_speed_mps": None}
-    ids = e["id"].astype(str).to_numpy(dtype=str)
+    # sorted by (id, step) as sort_values(["id", "step"], kind="stable") would, but on integer codes
+    e = e.iloc[np.lexsort((e["step"].to_numpy(), pd.factorize(e["id"], sort=True)[0]))]
+    inv, uid = pd.factorize(e["id"].astype(str), sort=True)  # code of each row's id (as text), ids sorted
     x, y = e["x"].to_numpy(float), e["y"].to_numpy(float)
     t = e["time_s"].to_numpy(float)
-    same = np.r_[False, ids[1:] == ids[:-1]]
+    same = np.r_[False, inv[1:] == inv[:-1]]
     seg = np.where(same, np.hypot(np.diff(x, prepend=x[0]), np.diff(y, prepend=y[0])), 0.0)
-    uid, inv = np.unique(ids, return_inverse=True)
     goal_xy = np.array([goals.get(i, (np.nan, np.nan)) for i in uid], float).reshape(-1, 2)
     gx, gy = goal_xy[:, 0], goal_xy[:, 1]  # per distinct ego (loop over egos, not rows), m
     within = np.hypot(x - gx[inv], y - gy[inv]) <= goal_tol_m  # False where no goal (NaN)
-    df = pd.DataFrame({"id": ids, "t": t, "seg": seg, "speed": e["speed"].to_numpy(float),
+    df = pd.DataFrame({"id": inv, "t": t, "seg": seg, "speed": e["speed"].to_numpy(float),
                        "t_hit": np.where(within, t, np.nan)})
-    g = df.groupby("id", sort=True)
+    g = df.groupby("id", sort=True)  # on the codes: the groups (and sums) of the ids, in their order
     agg = pd.DataFrame({"t0": g["t"].min(), "path": g["seg"].sum(), "v": g["speed"].mean(),
                         "t_hit": g["t_hit"].min()})
+    agg.index = np.asarray(uid)[agg.index.to_numpy()]
     for vid, row in agg.iterrows():  # one iteration per ego (reporting only)
         has_goal = vid in goals
         reached = bool(np.isfinite(row["t_hit"])) if has_goal else None

@@ -8,6 +8,7 @@ from sumo_avoid import __version__
 from sumo_avoid.core.geometry import footprint_corners
 from sumo_avoid.metrics import basic
 from sumo_avoid.metrics.base import Metric
+from sumo_avoid.metrics.pairs import Rows
 from sumo_avoid.rollout.arena import outside_distance as arena_outside_distance
 from sumo_avoid.rollout.result import RunResult
 
@@ -22,8 +23,13 @@ def ego_outside_distance(run: RunResult) -> np.ndarray:
     return run.road.footprint_outside_distance(corners)
 
 
+def pair_rows(run: RunResult) -> Rows:
+    """The table's columns and k-d tree pair search shared by collisions, min_gap and phi_coll."""
+    return run.memo("pair_rows", lambda: Rows.of(run.traj))
+
+
 def phi_coll(run: RunResult) -> float:
-    return run.memo("phi_coll", lambda: basic.phi_coll(run.traj, run.scenario.spec.sim.step_s))
+    return run.memo("phi_coll", lambda: basic.phi_coll(run.traj, run.scenario.spec.sim.step_s, rows=pair_rows(run)))
 
 
 def phi_wall(run: RunResult) -> float:
@@ -54,7 +60,7 @@ class Collisions(Metric):
     """Footprint contact events found by the plug-in, SUMO's own reports, and where they disagree."""
 
     def compute(self, run: RunResult) -> dict:
-        events = run.memo("collision_events", lambda: basic.collision_events(run.traj))
+        events = run.memo("collision_events", lambda: basic.collision_events(run.traj, rows=pair_rows(run)))
         sumo = run.sumo_events
         ours = {tuple(sorted(p)) for p in zip(events["a"], events["b"])}
         theirs = {tuple(sorted(p)) for p in zip(sumo["a"], sumo["b"])}
@@ -68,7 +74,7 @@ class MinGap(Metric):
     """Smallest footprint-to-footprint distance between an ego and any other vehicle, m."""
 
     def compute(self, run: RunResult) -> dict:
-        return {"min_gap_m": basic.min_gap_m(run.traj)}
+        return {"min_gap_m": basic.min_gap_m(run.traj, rows=pair_rows(run))}
 
 
 class PhiColl(Metric):

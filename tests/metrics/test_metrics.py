@@ -190,9 +190,9 @@ def test_motion_summary_straight_line():
     assert ms3["goal_reached"] is True and ms3["time_to_goal_s"] == pytest.approx(2.0)
 
 
-def test_pair_chunking_does_not_change_results(monkeypatch):
-    # brute force (loops, test only) vs the vectorised code with tiny chunks
-    import sumo_avoid.metrics.basic as mt
+def test_collisions_against_brute_force():
+    # brute force (loops, test only) vs the k-d tree pair search (tests/test_metrics_pairs.py pins
+    # the three pair metrics to the former all-pairs implementation)
     from sumo_avoid.core.geometry import convex_overlap, footprint_corners
 
     rng = np.random.default_rng(3)
@@ -202,11 +202,6 @@ def test_pair_chunking_does_not_change_results(monkeypatch):
             rows.append(row(s, f"v{k}", k < 3, *rng.uniform(0, 12, 2), heading=rng.uniform(-3, 3)))
     t = table(rows)
     ref_ev = collision_events(t)
-    ref_gap, ref_phi = min_gap_m(t), phi_coll(t, DT)
-    monkeypatch.setattr(mt, "_MAX_PAIRS_PER_CHUNK", 5)
-    pd.testing.assert_frame_equal(collision_events(t), ref_ev)
-    assert min_gap_m(t) == pytest.approx(ref_gap)
-    assert phi_coll(t, DT) == pytest.approx(ref_phi)
     contacts = set()
     for s, g in t.groupby("step"):
         c = footprint_corners(g[["x", "y"]].to_numpy(), g["heading"], g["length"], g["width"])
