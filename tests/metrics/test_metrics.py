@@ -191,7 +191,7 @@ def test_motion_summary_straight_line():
 
 
 def test_collisions_against_brute_force():
-    # brute force (loops, test only) vs the k-d tree pair search (tests/test_metrics_pairs.py pins
+    # brute force (loops, test only) vs the k-d tree pair search (tests/metrics/test_metrics_pairs.py pins
     # the three pair metrics to the former all-pairs implementation)
     from sumo_avoid.core.geometry import convex_overlap, footprint_corners
 
