@@ -17,6 +17,11 @@ def _cumlen(p: np.ndarray) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(seg)])
 
 
+def arc_lengths(path) -> np.ndarray:
+    """(P,) arc length, m, at each vertex of a (P,2) polyline (0 at the first)."""
+    return _cumlen(_as_path(path))
+
+
 def polyline_length(path) -> float:
     """Total arc length of a (P,2) polyline, m."""
     return float(_cumlen(_as_path(path))[-1])
