@@ -61,6 +61,7 @@ class _Ego:
     yellow: dict | None = None  # link position in task.links -> STOP | GO decided at the yellow's onset
     held: bool = False
     stopped_at: set = None  # stop lines (s) the ego was held at
+    watch: bool = True  # anything on the route for this layer to enforce
 
 
 def signal_char(signals, link) -> str:
@@ -95,7 +96,8 @@ class TrafficRulesLayer:
         self._caps = 0
 
     def add_ego(self, task: EgoTask) -> None:
-        self._egos[task.vid] = _Ego(task, yellow={}, stopped_at=set())
+        watch = any(lk.tls for lk in task.links) or self.p.speed_factor is not None
+        self._egos[task.vid] = _Ego(task, yellow={}, stopped_at=set(), watch=watch)
 
     def _signal_cap(self, e: _Ego, signals, v: float) -> float:
         p, cap = self.p, math.inf
@@ -117,7 +119,7 @@ class TrafficRulesLayer:
         out = np.array(command, dtype=float, copy=True)
         for i, vid in enumerate(obs.ego_ids):
             e = self._egos.get(vid)
-            if e is None:
+            if e is None or not e.watch:  # no signal on the route, no speed limits enforced: nothing to do
                 continue
             r = obs.ego_rows[i]
             h = snap.heading[r]
