@@ -63,6 +63,15 @@ def _type_name(tp) -> str:
             type(None): "nothing"}.get(tp, getattr(tp, "__name__", str(tp)))
 
 
+def _signed(value, meta, file: str, key: str, noun: str):
+    """``value`` if its sign is allowed by the field's ``positive`` / ``signed`` constraints."""
+    if meta["positive"] and value <= 0:
+        raise ScenarioError(file, key, f"a positive {noun}", value)
+    if value < 0 and not meta["signed"]:
+        raise ScenarioError(file, key, f"a non-negative {noun}", value)
+    return value
+
+
 def _coerce(value, tp, file: str, key: str, meta):
     origin = typing.get_origin(tp)
     if origin in (typing.Union, types.UnionType):
@@ -94,19 +103,11 @@ def _coerce(value, tp, file: str, key: str, meta):
         value = float(value)
         if not math.isfinite(value):
             raise ScenarioError(file, key, "a finite number", value)
-        if meta["positive"] and value <= 0:
-            raise ScenarioError(file, key, "a positive number", value)
-        if value < 0 and not meta["signed"]:
-            raise ScenarioError(file, key, "a non-negative number", value)
-        return value
+        return _signed(value, meta, file, key, "number")
     if tp is int:
         if isinstance(value, bool) or not isinstance(value, int):
             raise ScenarioError(file, key, "an integer", value)
-        if meta["positive"] and value <= 0:
-            raise ScenarioError(file, key, "a positive integer", value)
-        if value < 0 and not meta["signed"]:
-            raise ScenarioError(file, key, "a non-negative integer", value)
-        return value
+        return _signed(value, meta, file, key, "integer")
     if tp is bool:
         if not isinstance(value, bool):
             raise ScenarioError(file, key, "true or false", value)

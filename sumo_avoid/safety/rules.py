@@ -31,7 +31,7 @@ the command).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -57,11 +57,9 @@ class RulesParams:
 @dataclass
 class _Ego:
     task: EgoTask
+    watch: bool  # anything on the route for this layer to enforce
     s_m: float = 0.0
-    yellow: dict | None = None  # link position in task.links -> STOP | GO decided at the yellow's onset
-    held: bool = False
-    stopped_at: set = None  # stop lines (s) the ego was held at
-    watch: bool = True  # anything on the route for this layer to enforce
+    yellow: dict = field(default_factory=dict)  # link position in task.links -> STOP | GO at the yellow's onset
 
 
 def signal_char(signals, link) -> str:
@@ -92,15 +90,19 @@ class TrafficRulesLayer:
     def __init__(self, params: RulesParams, ctx=None):
         self.p = params
         self._egos: dict[str, _Ego] = {}
-        self._stops = 0
+        self._held: set[tuple[str, float]] = set()  # (ego, stop line s) where a signal held the ego
         self._caps = 0
 
     def add_ego(self, task: EgoTask) -> None:
         watch = any(lk.tls for lk in task.links) or self.p.speed_factor is not None
-        self._egos[task.vid] = _Ego(task, yellow={}, stopped_at=set(), watch=watch)
+        self._egos[task.vid] = _Ego(task, watch)
 
-    def _signal_cap(self, e: _Ego, signals, v: float) -> float:
-        p, cap = self.p, math.inf
+    def remove_ego(self, vid: str) -> None:
+        self._egos.pop(vid, None)
+
+    def _signal_cap(self, e: _Ego, signals, v: float) -> tuple[float, float]:
+        """(speed cap, s of the stop line that sets it) over the signals ahead."""
+        p, cap, line = self.p, math.inf, -1.0
         for k, link in enumerate(e.task.links):
             d = link.s_stop_m - e.s_m - p.stop_margin_m
             if not link.tls or link.s_stop_m < e.s_m or d > p.lookahead_m:
@@ -111,8 +113,10 @@ class TrafficRulesLayer:
             if c == "y" and k not in e.yellow:
                 e.yellow[k] = STOP if v * v / (2.0 * p.comfort_decel_mps2) <= d else GO
             if c in RED or e.yellow.get(k) == STOP:
-                cap = min(cap, math.sqrt(2.0 * p.comfort_decel_mps2 * max(d, 0.0)))
-        return cap
+                here = math.sqrt(2.0 * p.comfort_decel_mps2 * max(d, 0.0))
+                if here < cap:
+                    cap, line = here, link.s_stop_m
+        return cap, line
 
     def filter(self, obs, command: np.ndarray) -> np.ndarray:
         snap = obs.snapshot
@@ -126,12 +130,10 @@ class TrafficRulesLayer:
             front = snap.pos[r] + 0.5 * snap.length[r] * np.array([math.cos(h), math.sin(h)])
             e.s_m = polyline_project(e.task.path, front)
             v = abs(float(obs.ego_speed[i]))
-            sig = self._signal_cap(e, snap.signals, v)
+            sig, line = self._signal_cap(e, snap.signals, v)
             road = road_speed_cap(e.task, e.s_m, self.p)
-            held = sig < v or sig < 0.5
-            if held and not e.held:  # one episode per stop line, however often the cap binds
-                e.stopped_at.add(self._next_stop(e))
-            e.held = held
+            if sig < v or sig < 0.5:  # one episode per ego and stop line, however often the cap binds
+                self._held.add((vid, line))
             speed = math.hypot(out[i, 0], out[i, 1])
             cap = min(sig, road)
             if speed > cap:
@@ -139,15 +141,5 @@ class TrafficRulesLayer:
                 out[i] *= cap / speed
         return out
 
-    def _next_stop(self, e: _Ego) -> float:
-        ahead = [lk.s_stop_m for lk in e.task.links if lk.tls and lk.s_stop_m >= e.s_m]
-        return min(ahead) if ahead else -1.0
-
-    def remove_ego(self, vid: str) -> None:
-        e = self._egos.pop(vid, None)
-        if e is not None:
-            self._stops += len(e.stopped_at)
-
     def stats(self) -> dict:
-        stops = self._stops + sum(len(e.stopped_at) for e in self._egos.values())
-        return {"rules_signal_stops": stops, "rules_speed_caps": self._caps}
+        return {"rules_signal_stops": len(self._held), "rules_speed_caps": self._caps}

@@ -7,6 +7,7 @@ dataclasses below by ``python -m sumo_avoid.scenario.spec``).
 """
 from __future__ import annotations
 
+import functools
 import math
 import pathlib
 import sys
@@ -251,20 +252,31 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     return Scenario(spec, path, net, routes, adds, params)
 
 
+@functools.lru_cache(maxsize=64)
+def _vehicles_in(path: str, mtime_ns: int, size: int) -> tuple[frozenset[str], frozenset[str]]:
+    """(vehicle and trip ids, flow ids) of one SUMO route/additional file, parsed once per version
+    (a batch loads the same scenario for every seed); a file that is not XML is left for SUMO to
+    reject (with its own reason) when the run starts."""
+    ids, flows = set(), set()
+    try:
+        for _, el in ET.iterparse(path):
+            if el.tag in ("vehicle", "trip") and "id" in el.attrib:
+                ids.add(el.attrib["id"])
+            elif el.tag == "flow" and "id" in el.attrib:
+                flows.add(el.attrib["id"])
+            el.clear()
+    except (ET.ParseError, OSError):
+        pass
+    return frozenset(ids), frozenset(flows)
+
+
 def _defined_vehicles(files) -> tuple[set[str], set[str]]:
-    """(vehicle and trip ids, flow ids) defined in SUMO route/additional files; a file that is not
-    XML is left for SUMO to reject (with its own reason) when the run starts."""
     ids, flows = set(), set()
     for f in files:
-        try:
-            for _, el in ET.iterparse(f):
-                if el.tag in ("vehicle", "trip") and "id" in el.attrib:
-                    ids.add(el.attrib["id"])
-                elif el.tag == "flow" and "id" in el.attrib:
-                    flows.add(el.attrib["id"])
-                el.clear()
-        except (ET.ParseError, OSError):
-            continue
+        st = pathlib.Path(f).stat()
+        i, fl = _vehicles_in(str(f), st.st_mtime_ns, st.st_size)
+        ids |= i
+        flows |= fl
     return ids, flows
 
 

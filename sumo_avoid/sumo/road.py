@@ -32,13 +32,17 @@ from sumo_avoid.core.polyline import (
 from sumo_avoid.core.types import RouteLink
 
 
+def _keep_mask(points: np.ndarray, tol: float = 1e-6) -> np.ndarray:
+    """False for a point within ``tol`` of the one before it (consecutive duplicates)."""
+    keep = np.ones(len(points), bool)
+    if len(points) >= 2:
+        keep[1:] = np.hypot(*np.diff(points, axis=0).T) > tol
+    return keep
+
+
 def _dedupe(points: np.ndarray, tol: float = 1e-6) -> np.ndarray:
     """Drop consecutive duplicate points."""
-    if len(points) < 2:
-        return points
-    keep = np.ones(len(points), bool)
-    keep[1:] = np.hypot(*np.diff(points, axis=0).T) > tol
-    return points[keep]
+    return points[_keep_mask(points, tol)] if len(points) >= 2 else points
 
 
 def _offset_left(shape: np.ndarray, dist: float) -> np.ndarray:
@@ -222,11 +226,9 @@ class Road:
         if not edges:
             raise ValueError("empty route")
         pieces: list[np.ndarray] = []
-        links: list[RouteLink] = []
-        limits: list[tuple[float, float]] = []
-
-        def here() -> float:
-            return polyline_length(_dedupe(np.concatenate(pieces), tol=1e-3)) if pieces else 0.0
+        link_at: list[tuple[object, int]] = []  # (connection, points before its stop line)
+        limit_at: list[tuple[float, int]] = []  # (speed limit, points before its lane piece)
+        n_points = 0
         entry = depart_lane
         for k, e in enumerate(edges):
             lanes = e.getLanes()
@@ -246,7 +248,7 @@ class Road:
             exit_idx = int(np.clip(exit_idx, 0, len(lanes) - 1))
             entry_idx = exit_idx if entry is None else int(np.clip(entry, 0, len(lanes) - 1))
             exit_shape = np.asarray(lanes[exit_idx].getShape(), float)
-            limits.append((here(), float(lanes[exit_idx].getSpeed())))
+            limit_at.append((float(lanes[exit_idx].getSpeed()), n_points))
             if entry_idx != exit_idx:
                 entry_shape = np.asarray(lanes[entry_idx].getShape(), float)
                 L = polyline_length(exit_shape)
@@ -255,13 +257,26 @@ class Road:
                 pieces += [entry_shape[:1], polyline_point_at(exit_shape, s0)[None], exit_shape[cum > s0]]
             else:
                 pieces.append(exit_shape)
+            n_points = sum(len(piece) for piece in pieces)
             if conn is not None:
-                links.append(self._link(conn, here()))
+                link_at.append((conn, n_points))
                 for shape, speed in self._via_lanes(conn):
-                    limits.append((here(), speed))
+                    limit_at.append((speed, n_points))
                     pieces.append(shape)
+                    n_points += len(shape)
                 entry = conn.getToLane().getIndex()
-        return _dedupe(np.concatenate(pieces), tol=1e-3), tuple(links), np.array(limits, float).reshape(-1, 2)
+        points = np.concatenate(pieces)
+        keep = _keep_mask(points, tol=1e-3)
+        path = points[keep]
+        cum = _cumlen(path)
+        kept_before = np.concatenate([[0], np.cumsum(keep)])  # kept points among the first n
+
+        def s_at(n: int) -> float:  # arc length where the points after the first n begin
+            return float(cum[kept_before[n] - 1]) if kept_before[n] else 0.0
+
+        links = tuple(self._link(conn, s_at(n)) for conn, n in link_at)
+        limits = np.array([(s_at(n), v) for v, n in limit_at], float).reshape(-1, 2)
+        return path, links, limits
 
     @staticmethod
     def _link(conn, s_stop_m: float) -> RouteLink:
