@@ -68,6 +68,27 @@ def polyline_project_many(path, points) -> np.ndarray:
     return _cumlen(p)[k] + t[rows, k] * np.sqrt(l2[k])
 
 
+def polyline_track(path, points, s_start: float | None = None, window_m: float = 30.0) -> np.ndarray:
+    """Arc lengths (N,) of consecutive positions of one vehicle along ``path``: each point is
+    projected on the part of the path within ``window_m`` of the previous one's arc length (the
+    first: of ``s_start``, or on the whole path), so a route that comes back past itself (a
+    turnaround, a loop, a roundabout) is followed branch by branch instead of jumping."""
+    p = _as_path(path)
+    q = np.asarray(points, dtype=float).reshape(-1, 2)
+    cum = _cumlen(p)
+    out = np.zeros(len(q))
+    prev = s_start
+    for i, point in enumerate(q):
+        if prev is None:
+            prev = float(polyline_project_many(p, point[None])[0])
+        else:
+            lo = max(0, int(np.searchsorted(cum, prev - window_m, side="right")) - 1)
+            hi = min(len(p), int(np.searchsorted(cum, prev + window_m, side="left")) + 1)
+            prev = float(cum[lo] + polyline_project_many(p[lo:hi], point[None])[0])
+        out[i] = prev
+    return out
+
+
 def route_segments(paths):
     """The egos' route paths as padded segment arrays for :func:`route_directions`: (rows with a
     path, segment starts (P, S, 2), segment vectors (P, S, 2), squared lengths (P, S)); NaN pads."""

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sumo_avoid.core.polyline import polyline_project_many
+from sumo_avoid.core.polyline import polyline_track
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.rollout.result import RunResult
 from sumo_avoid.safety.rules import RED
@@ -38,7 +38,7 @@ def signal_crossings(run: RunResult) -> list[dict]:
             continue
         h = ego["heading"].to_numpy()
         front = ego[["x", "y"]].to_numpy() + 0.5 * ego["length"].to_numpy()[:, None] * np.column_stack([np.cos(h), np.sin(h)])
-        s = polyline_project_many(task.path, front)
+        s = polyline_track(task.path, front)
         t, v = ego["time_s"].to_numpy(), ego["speed"].to_numpy()
         for lk in links:
             k = np.flatnonzero((s[:-1] < lk.s_stop_m) & (s[1:] >= lk.s_stop_m))

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from sumo_avoid.core.config import field_doc
-from sumo_avoid.core.polyline import polyline_project
+from sumo_avoid.core.polyline import polyline_track
 from sumo_avoid.core.types import EgoTask
 
 STOP, GO = "stop", "go"
@@ -58,7 +58,8 @@ class RulesParams:
 class _Ego:
     task: EgoTask
     watch: bool  # anything on the route for this layer to enforce
-    s_m: float = 0.0
+    s_m: float = 0.0  # front bumper's arc length on task.path, followed step by step
+    seen: bool = False
     yellow: dict = field(default_factory=dict)  # link position in task.links -> STOP | GO at the yellow's onset
 
 
@@ -128,7 +129,8 @@ class TrafficRulesLayer:
             r = obs.ego_rows[i]
             h = snap.heading[r]
             front = snap.pos[r] + 0.5 * snap.length[r] * np.array([math.cos(h), math.sin(h)])
-            e.s_m = polyline_project(e.task.path, front)
+            e.s_m = float(polyline_track(e.task.path, front, e.s_m if e.seen else None)[0])
+            e.seen = True
             v = abs(float(obs.ego_speed[i]))
             sig, line = self._signal_cap(e, snap.signals, v)
             road = road_speed_cap(e.task, e.s_m, self.p)
