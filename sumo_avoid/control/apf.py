@@ -1,21 +1,28 @@
-"""``apf``: artificial potential field on a road (SPEC §2, seed 001).
+"""``apf``: artificial potential field on a road (SPEC §2, seed 001), in the ego's route frame (SPEC §5).
 
-Per ego and step:
+Everything is computed in Frenet coordinates (s along the route's reference path, d across it;
+:mod:`sumo_avoid.control.road_view`): a bend, a junction turn or a ramp looks straight to the
+field, and the command is mapped back to the plane. Per ego and step:
 
 * **Attraction** (SPEC §2, seed eq. 13-14, capped beyond ``d_att_m``) towards a *carrot*: the
-  point ``lookahead`` metres ahead of the ego on the reference path of its route (lane centres
-  joined through the junction), or the goal itself once it is closer than that. A straight-line
-  pull to a goal round a corner would pin the car against the kerb.
+  point ``lookahead`` metres ahead of the ego along its route, (s + lookahead, d_lane) with d_lane
+  the centre of the lane it keeps (0: the path's lane; an escape's offset), or the goal once it is
+  closer than that. Its lateral part is the lane-keeping pull towards d_lane.
 * **Repulsion** (SPEC §2, seed eq. 3-8) ``K (1/rho - 1/rho0) / rho^2`` from every other vehicle's
   footprint (rho = footprint-to-footprint distance, direction from the obstacle's nearest point
-  to the ego's) and, with its own gain and influence distance, from road edges and solid lines
-  (the left border of each edge, i.e. the centre line between opposite directions).
+  to the ego's) and, with its own gain and influence distance, across the road from the bounds of
+  the lanes of the ego's direction (rho = distance in d from the footprint's nearest corner to the
+  bound at that corner's s, always pushing inwards) (:class:`~sumo_avoid.core.lanes.RouteLanes`: the road edge, a two-way road's
+  centre line, inside a junction the internal lane of the route, where lanes end).
 * **Influence distance from speed and braking**: ``rho0 = rho0_min + max(cos(phi), 0) *
   (v_close^2 / (2 b) + t_h |v|)`` with ``phi`` the bearing of the obstacle from the heading and
   ``v_close`` the closing speed: an obstacle ahead is felt from the stopping distance, one beside
-  only from ``rho0_min``.
+  only from ``rho0_min``. A vehicle whose footprint does not overlap the ego's across the road
+  (d, with ``gov_margin_m``; oncoming traffic in its lane, a car in the next lane) closes only
+  with its speed across the road: the ego can pass it.
 * **Velocity**: the ego moves along F (direction F/|F|) at ``min(cruise, |F| * cruise / F_att_max,
-  v_safe)``: at the potential's minimum it stops. ``v_safe`` is a speed governor: the speed from
+  v_safe, v_curve)``: at the potential's minimum it stops; ``v_curve`` is the speed for the road
+  ahead (SPEC §5: sqrt(a_lat / |kappa|) within braking distance, RouteFrame.curve_speed_limit). ``v_safe`` is a speed governor: the speed from
   which the ego can stop behind whatever is in its corridor ahead even if that brakes to a stop,
   ``sqrt(v_lead^2 + 2 b (gap - s0))``.
 """
@@ -25,15 +32,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sumo_avoid.control.road_view import FrenetScene, RoadView
 from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.geometry import (
     convex_distance,
     footprint_corners,
     point_segment_distance,
 )
-from sumo_avoid.core.polyline import polyline_point_at, polyline_project
 from sumo_avoid.core.types import EgoTask, Needs, Observation
-from sumo_avoid.sensing.perception import obstacle_vehicles
 
 
 @dataclass(frozen=True)
@@ -54,6 +60,10 @@ class ApfParams:
     gov_decel_mps2: float = field_doc(4.0, doc="speed governor: braking it plans with, m/s^2")
     gov_standstill_m: float = field_doc(2.0, doc="speed governor: gap kept at standstill, m")
     gov_margin_m: float = field_doc(0.4, doc="speed governor: lateral margin of the corridor ahead, m")
+    max_course_deg: float = field_doc(35.0, doc="moving forward, the commanded direction stays within this angle of the road's, deg")
+    max_lat_speed_mps: float = field_doc(1.5, doc="moving forward, the commanded speed across the road stays below this, m/s")
+    curve_lat_accel_mps2: float = field_doc(2.5, doc="speed for the road ahead: lateral acceleration in bends, m/s^2")
+    curve_decel_mps2: float = field_doc(3.0, doc="speed for the road ahead: braking before a bend, m/s^2")
 
 
 @dataclass(frozen=True)
@@ -92,92 +102,99 @@ def _unit(v):
 
 
 class ApfController:
-    """Plain potential field (no escape from local minima)."""
+    """Plain potential field (no escape from local minima), in each ego's route frame."""
 
     needs = Needs(goals=True)
     metrics = ()  # metrics of its own beside the standard set
 
     def __init__(self, params: ApfParams, ctx):
         self.p = params
-        self.road = ctx.road
+        self.max_course = np.radians(params.max_course_deg)
         self.rng = ctx.rng()
+        self.step_s = float(ctx.step_s)
         self.tasks: dict[str, EgoTask] = {}
+        self.views: dict[str, RoadView] = {}
         self.last_force: dict[str, float] = {}
 
     def add_ego(self, task: EgoTask) -> None:
         self.tasks[task.vid] = task
+        self.views[task.vid] = RoadView(task)
 
     def remove_ego(self, vid: str) -> None:
         self.tasks.pop(vid, None)
+        self.views.pop(vid, None)
 
     def stats(self) -> dict:
         return {}
 
-    # --- targets ---------------------------------------------------------------------------
-    def carrot(self, task: EgoTask, q, speed: float, lateral_offset: float = 0.0) -> np.ndarray:
-        lookahead = max(self.p.lookahead_min_m, self.p.lookahead_time_s * abs(speed))
-        if np.hypot(*(task.goal - q)) <= lookahead and lateral_offset == 0.0:
-            return task.goal
-        s = polyline_project(task.path, q) + lookahead
-        point = polyline_point_at(task.path, s)
-        if lateral_offset:
-            ahead = polyline_point_at(task.path, s + 1.0)
-            t, _ = _unit(ahead - point)
-            point = point + lateral_offset * np.array([-t[1], t[0]])
-        return point
+    # --- targets (Frenet) ------------------------------------------------------------------
+    def lookahead(self, speed: float) -> float:
+        return max(self.p.lookahead_min_m, self.p.lookahead_time_s * abs(speed))
 
-    # --- the field -------------------------------------------------------------------------
-    def field(self, obs: Observation, row: int, q_cand: np.ndarray, target: np.ndarray,
-              heading: float | None = None) -> Field:
-        """Potential, force and governor speed for the ego at ``row`` placed at ``q_cand`` (C,2)
-        (with its own heading, or ``heading`` in rad)."""
-        p, snap = self.p, obs.snapshot
+    def carrot(self, view: RoadView, sc: FrenetScene, lateral_offset: float = 0.0) -> np.ndarray:
+        """(s, d) the attraction pulls towards."""
+        ahead = self.lookahead(float(np.hypot(*sc.vel)))
+        if np.hypot(*(view.goal - sc.q)) <= ahead and lateral_offset == 0.0:
+            return view.goal
+        return np.array([min(sc.s + ahead, view.length_m), lateral_offset])
+
+    def scene(self, obs: Observation, row: int, vid: str) -> FrenetScene:
+        return self.views[vid].scene(obs, row, self.p.sense_radius_m)
+
+    # --- the field (Frenet) ----------------------------------------------------------------
+    def field(self, sc: FrenetScene, q_cand: np.ndarray, target: np.ndarray, heading: float | None = None) -> Field:
+        """Potential, force and governor speed for the ego placed at ``q_cand`` (C,2) in (s, d)
+        (with its own relative heading, or ``heading`` in rad)."""
+        p = self.p
         q_cand = np.atleast_2d(np.asarray(q_cand, float))
         C = len(q_cand)
-        h = snap.heading[row] if heading is None else heading
-        L, W = snap.length[row], snap.width[row]
-        v_ego = snap.vel[row]
+        h = sc.heading if heading is None else heading
+        L, W, v_ego = sc.length, sc.width, sc.vel
         hd = np.array([np.cos(h), np.sin(h)])
         U, F = attraction(q_cand, target, p.k_att, p.d_att_m)
         ego_corners = footprint_corners(q_cand, np.full(C, h), np.full(C, L), np.full(C, W))  # (C,4,2)
 
-        # other vehicles within the sensing radius
-        o_pos, o_hd, o_len, o_wid, o_vel = obstacle_vehicles(obs, row, q_cand[0], p.sense_radius_m)
         v_safe = np.inf
-        if len(o_pos):
-            oc = footprint_corners(o_pos, o_hd, o_len, o_wid)
-            O = len(o_pos)
+        O = len(sc.o_pos)
+        if O:
+            oc = footprint_corners(sc.o_pos, sc.o_heading, sc.o_length, sc.o_width)
             P = np.repeat(ego_corners, O, axis=0)
             Q = np.tile(oc, (C, 1, 1))
             rho, p_ego, p_obs = convex_distance(P, Q)
-            centre_dir, _ = _unit(np.repeat(q_cand, O, axis=0) - np.tile(o_pos, (C, 1)))
+            centre_dir, _ = _unit(np.repeat(q_cand, O, axis=0) - np.tile(sc.o_pos, (C, 1)))
             away, n = _unit(p_ego - p_obs)
             away = np.where((n > 1e-6)[:, None], away, centre_dir)
             towards = -away
             cos_phi = np.maximum(towards @ hd, 0.0)
-            v_rel = v_ego[None, :] - np.tile(o_vel, (C, 1))
+            v_rel = v_ego[None, :] - np.tile(sc.o_vel, (C, 1))
             closing = np.maximum(np.einsum("ij,ij->i", v_rel, towards), 0.0)
+            # a vehicle beside the ego's lane strip (no overlap across the road, e.g. oncoming in
+            # its own lane, or slower in the next lane) is felt from its closing speed across the
+            # road only: passing it is no threat, drifting towards it is
+            e_lo, e_hi = np.repeat(ego_corners[..., 1].min(1), O), np.repeat(ego_corners[..., 1].max(1), O)
+            o_lo, o_hi = np.tile(oc[..., 1].min(1), C), np.tile(oc[..., 1].max(1), C)
+            beside = (e_lo - p.gov_margin_m > o_hi) | (e_hi + p.gov_margin_m < o_lo)
+            side = np.sign(np.tile(sc.o_pos[:, 1], C) - np.repeat(q_cand[:, 1], O))
+            closing = np.where(beside, np.maximum(v_rel[:, 1] * side, 0.0), closing)
             rho0 = p.rho0_min_m + cos_phi * (closing**2 / (2 * p.rho0_decel_mps2) + p.rho0_headway_s * np.hypot(*v_ego))
             Ur, Fr = repulsion(rho, away, rho0, p.k_rep)
             U = U + Ur.reshape(C, O).sum(axis=1)
             F = F + Fr.reshape(C, O, 2).sum(axis=1)
-            v_safe = self._governor(q_cand[0], hd, L, W, oc, o_vel)
+            v_safe = self._governor(q_cand[0], hd, L, W, oc, sc.o_vel)
 
-        segs = self.road.segments_near(q_cand[0], p.rho0_edge_m + 0.5 * np.hypot(L, W) + 5.0)
-        if len(segs):
-            S = len(segs)
-            P = np.repeat(ego_corners, S, axis=0)
-            Q = np.tile(segs, (C, 1, 1))
-            rho, _, _ = convex_distance(P, Q)
-            _, closest = point_segment_distance(q_cand, segs[:, 0], segs[:, 1])  # (C,S,2)
-            away, _ = _unit(q_cand[:, None, :] - closest)
-            away = away.reshape(-1, 2)
-            # a car drifting towards the kerb feels it earlier: closing speed -> stopping distance
-            closing = np.maximum(-(away @ v_ego), 0.0)
+        # the bounds of the ego's lanes, one line on each side, repel across the road (always
+        # inwards: a car past a bound is pushed back, never further out) from the footprint's
+        # corner nearest to each, with the bound taken at that corner's s
+        lo, hi = sc.corridor(ego_corners[..., 0].ravel())
+        cd = ego_corners[..., 1].ravel()
+        lo_here, hi_here = sc.corridor(np.array([sc.s]))
+        room = max(0.5 * (float(hi_here[0] - lo_here[0]) - W), 0.1)  # beside a centred car, m
+        for rho, inward in (((cd - lo).reshape(C, 4).min(axis=1), 1.0), ((hi - cd).reshape(C, 4).min(axis=1), -1.0)):
+            closing = max(-inward * float(v_ego[1]), 0.0)  # a car drifting towards the bound feels it earlier
             rho0 = p.rho0_edge_m + closing**2 / (2.0 * p.edge_lat_decel_mps2) + p.edge_reaction_s * closing
-            Ur, Fr = repulsion(rho, away, rho0, p.k_edge, rho_floor=0.05)
-            U = U + Ur.reshape(C, S).sum(axis=1)
-            F = F + Fr.reshape(C, S, 2).sum(axis=1)
+            rho0 = min(rho0, 0.8 * room)  # in a narrow lane a centred car feels neither bound
+            Ur, Fr = repulsion(rho, np.tile([0.0, inward], (C, 1)), np.full(C, rho0), p.k_edge, rho_floor=0.05)
+            U, F = U + Ur, F + Fr
         return Field(U, F, float(v_safe))
 
     def _governor(self, q, hd, L, W, corners, vel) -> float:
@@ -194,28 +211,37 @@ class ApfController:
         free = np.maximum(gap - self.p.gov_standstill_m, 0.0)
         return float(np.sqrt(v_lead**2 + 2.0 * self.p.gov_decel_mps2 * free).min())
 
-    def velocity(self, fld: Field, cruise: float) -> np.ndarray:
+    def velocity(self, fld: Field, cruise: float, v_road: float = np.inf) -> np.ndarray:
+        """(s_dot, d_dot) along F at min(cruise, |F| cruise / F_att_max, v_safe, v_road); forward, the
+        direction is kept within ``max_course_deg`` of the road's (the field's sideways pull of a
+        wall its corner touches would otherwise ask a car to turn on the spot)."""
         F = fld.F[0]
         mag = np.hypot(*F)
         if mag < 1e-9:
             return np.zeros(2)
         f_max = self.p.k_att * self.p.d_att_m
-        speed = min(cruise, mag * cruise / f_max, fld.v_safe)
-        return F / mag * speed
+        speed = min(cruise, mag * cruise / f_max, fld.v_safe, v_road)
+        course = np.arctan2(F[1], F[0])
+        if F[0] <= 0.0:
+            return speed * np.array([np.cos(course), np.sin(course)])
+        # a car going forward steers at most max_course off the road's direction and moves across
+        # it at most at max_lat_speed: a wall a corner touches must not turn it sideways
+        course = np.clip(course, -self.max_course, self.max_course)
+        v = speed * np.array([np.cos(course), np.sin(course)])
+        v[1] = np.clip(v[1], -self.p.max_lat_speed_mps, self.p.max_lat_speed_mps)
+        return v
+
+    def road_speed(self, view: RoadView, sc: FrenetScene) -> float:
+        return view.curve_speed(sc.s, self.p.curve_lat_accel_mps2, self.p.curve_decel_mps2)
 
     # --- one step --------------------------------------------------------------------------
     def act(self, obs: Observation) -> np.ndarray:
         out = np.zeros((len(obs.ego_ids), 2))
-        snap = obs.snapshot
         for k, (vid, row) in enumerate(zip(obs.ego_ids, obs.ego_rows)):
-            task = self.tasks[vid]
-            q = snap.pos[row]
-            target = self.target(task, obs, row)
-            fld = self.field(obs, row, q[None, :], target)
+            task, view = self.tasks[vid], self.views[vid]
+            sc = self.scene(obs, row, vid)
+            fld = self.field(sc, sc.q[None, :], self.carrot(view, sc))
             self.last_force[vid] = float(np.hypot(*fld.F[0]))
-            out[k] = self.velocity(fld, task.cruise_speed_mps)
+            v = self.velocity(fld, task.cruise_speed_mps, self.road_speed(view, sc))
+            out[k] = view.to_xy_velocity(sc.s, sc.d, v, self.step_s)
         return out
-
-    def target(self, task: EgoTask, obs: Observation, row: int) -> np.ndarray:
-        snap = obs.snapshot
-        return self.carrot(task, snap.pos[row], float(np.hypot(*snap.vel[row])))

@@ -29,6 +29,22 @@ class RouteLink:
 
 
 @dataclass(frozen=True)
+class LanePiece:
+    """One piece of the ego's reference path on one SUMO lane (from the net, static): where it is
+    on the path and where the other lanes of its edge lie across it (the lanes of the ego's own
+    direction; the opposite direction is another edge). Offsets are linear in s over the piece
+    (the path blends from one lane to another at the start of an edge)."""
+
+    s_start_m: float  # arc length along EgoTask.path where the piece starts, m
+    s_end_m: float  # ... and ends, m
+    edge: str  # SUMO edge id (internal ":..." edges inside junctions)
+    lane: int  # index of the lane the path follows on this piece
+    offsets_start_m: tuple[float, ...]  # d of every lane centre of the edge (by lane index) at s_start, m
+    offsets_end_m: tuple[float, ...]  # ... at s_end, m
+    widths_m: tuple[float, ...]  # lane widths (by lane index), m
+
+
+@dataclass(frozen=True)
 class EgoTask:
     vid: str
     goal: np.ndarray  # (2,) m
@@ -36,6 +52,7 @@ class EgoTask:
     cruise_speed_mps: float
     links: tuple[RouteLink, ...] = ()  # junction links along the path, in route order
     speed_limits: np.ndarray | None = None  # (K, 2) [s where a lane piece starts, its speed limit], m, m/s
+    lanes: tuple[LanePiece, ...] = ()  # the path's lane pieces, in route order
 
 
 @dataclass(frozen=True)

@@ -28,11 +28,11 @@ class EgoBook:
 
     def take_over(self, sim, vid: str) -> EgoTask:
         info = sim.take_over(vid)
-        path, links, limits = self.road.route(list(info.route_edges), depart_lane=info.lane_index)
+        path, links, limits, lanes = self.road.route(list(info.route_edges), depart_lane=info.lane_index)
         goal = np.asarray(self.goal if self.goal is not None else path[-1], float)
         if self.uses_goals:
             self.goals[vid] = (float(goal[0]), float(goal[1]))
-        task = EgoTask(vid, goal, path, self.cruise_speed_mps, links, limits)
+        task = EgoTask(vid, goal, path, self.cruise_speed_mps, links, limits, lanes)
         self.active[vid] = task
         self.tasks[vid] = task
         return task

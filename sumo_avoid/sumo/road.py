@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import functools
 import os
+from typing import NamedTuple
 
 import numpy as np
 import shapely
@@ -29,7 +30,23 @@ from sumo_avoid.core.polyline import (
     polyline_point_at,
     polyline_project,
 )
-from sumo_avoid.core.types import RouteLink
+from sumo_avoid.core.types import LanePiece, RouteLink
+
+
+class RoutePlan(NamedTuple):
+    """What :meth:`Road.route` gives for an ego's route."""
+
+    path: np.ndarray  # (P, 2) reference polyline, m
+    links: tuple[RouteLink, ...]  # junction links passed, in route order
+    speed_limits: np.ndarray  # (K, 2) [s where a lane piece starts, its speed limit], m, m/s
+    lanes: tuple[LanePiece, ...]  # lane pieces of the path
+
+
+def _lane_centres(lanes) -> tuple[tuple[float, ...], np.ndarray]:
+    """Widths and lateral centre positions (from the right edge, m) of an edge's lanes by index
+    (lane 0 is the rightmost)."""
+    w = np.array([float(ln.getWidth()) for ln in sorted(lanes, key=lambda ln: ln.getIndex())])
+    return tuple(w.tolist()), np.cumsum(w) - 0.5 * w
 
 
 def _keep_mask(points: np.ndarray, tol: float = 1e-6) -> np.ndarray:
@@ -208,13 +225,13 @@ class Road:
 
     def route_path(self, edge_ids, depart_lane: int | None = None, arrival_lane: int | None = None) -> np.ndarray:
         """Reference polyline (P,2) along the route (:meth:`route`)."""
-        return self.route(edge_ids, depart_lane, arrival_lane)[0]
+        return self.route(edge_ids, depart_lane, arrival_lane).path
 
-    def route(self, edge_ids, depart_lane: int | None = None,
-              arrival_lane: int | None = None) -> tuple[np.ndarray, tuple[RouteLink, ...], np.ndarray]:
+    def route(self, edge_ids, depart_lane: int | None = None, arrival_lane: int | None = None) -> RoutePlan:
         """Reference polyline (P,2) along consecutive normal edges, joined by internal lanes, and
         the junction links it passes (:class:`RouteLink`: stop line arc length, signal, right of way),
-        and the speed limits along it ((K, 2): arc length where a lane piece starts, its speed, m/s).
+        the speed limits along it ((K, 2): arc length where a lane piece starts, its speed, m/s) and
+        its lane pieces (:class:`LanePiece`: edge, lane, where the edge's other lanes lie across it).
 
         On every edge one lane is used that has a connection to the next edge (the one
         nearest to the lane we entered on, or to ``depart_lane`` on the first edge). If the
@@ -228,6 +245,7 @@ class Road:
         pieces: list[np.ndarray] = []
         link_at: list[tuple[object, int]] = []  # (connection, points before its stop line)
         limit_at: list[tuple[float, int]] = []  # (speed limit, points before its lane piece)
+        piece_at: list[tuple] = []  # (edge, lane, offsets at start, offsets at end, widths, points before it)
         n_points = 0
         entry = depart_lane
         for k, e in enumerate(edges):
@@ -249,19 +267,26 @@ class Road:
             entry_idx = exit_idx if entry is None else int(np.clip(entry, 0, len(lanes) - 1))
             exit_shape = np.asarray(lanes[exit_idx].getShape(), float)
             limit_at.append((float(lanes[exit_idx].getSpeed()), n_points))
+            widths, centres = _lane_centres(lanes)
+            exit_off = tuple((centres - centres[exit_idx]).tolist())
             if entry_idx != exit_idx:
                 entry_shape = np.asarray(lanes[entry_idx].getShape(), float)
                 L = polyline_length(exit_shape)
                 s0 = min(0.5 * L, 60.0)
                 cum = _cumlen(exit_shape)
                 pieces += [entry_shape[:1], polyline_point_at(exit_shape, s0)[None], exit_shape[cum > s0]]
+                piece_at.append((e.getID(), exit_idx, tuple((centres - centres[entry_idx]).tolist()), exit_off, widths, n_points))
+                piece_at.append((e.getID(), exit_idx, exit_off, exit_off, widths, n_points + 2))
             else:
                 pieces.append(exit_shape)
+                piece_at.append((e.getID(), exit_idx, exit_off, exit_off, widths, n_points))
             n_points = sum(len(piece) for piece in pieces)
             if conn is not None:
                 link_at.append((conn, n_points))
-                for shape, speed in self._via_lanes(conn):
+                for lane, shape, speed in self._via_lanes(conn):
                     limit_at.append((speed, n_points))
+                    piece_at.append((lane.getEdge().getID(), lane.getIndex(), (0.0,), (0.0,),
+                                     (float(lane.getWidth()),), n_points))
                     pieces.append(shape)
                     n_points += len(shape)
                 entry = conn.getToLane().getIndex()
@@ -276,7 +301,11 @@ class Road:
 
         links = tuple(self._link(conn, s_at(n)) for conn, n in link_at)
         limits = np.array([(s_at(n), v) for v, n in limit_at], float).reshape(-1, 2)
-        return path, links, limits
+        starts = [s_at(n) for *_, n in piece_at]
+        ends = starts[1:] + [float(cum[-1])]
+        lane_pieces = tuple(LanePiece(a, max(a, b), edge, lane, o0, o1, w)
+                            for (edge, lane, o0, o1, w, _), a, b in zip(piece_at, starts, ends))
+        return RoutePlan(path, links, limits, lane_pieces)
 
     @staticmethod
     def _link(conn, s_stop_m: float) -> RouteLink:
@@ -284,8 +313,8 @@ class Road:
         return RouteLink(float(s_stop_m), conn.getFrom().getToNode().getID(), tls,
                          int(conn.getTLLinkIndex()) if tls else -1, conn.getState() or "", conn.getDirection() or "")
 
-    def _via_lanes(self, conn) -> list[tuple[np.ndarray, float]]:
-        """(shape, speed limit) of the chain of internal lanes of a connection (possibly split in several)."""
+    def _via_lanes(self, conn) -> list[tuple]:
+        """(lane, shape, speed limit) of the chain of internal lanes of a connection (possibly split in several)."""
         out = []
         target = conn.getToLane().getID()
         via = conn.getViaLaneID()
@@ -293,7 +322,7 @@ class Road:
         while via and guard < 32:
             guard += 1
             lane = self._net.getLane(via)
-            out.append((np.asarray(lane.getShape(), float), float(lane.getSpeed())))
+            out.append((lane, np.asarray(lane.getShape(), float), float(lane.getSpeed())))
             outs = lane.getOutgoing()
             if not outs:
                 break

@@ -119,7 +119,7 @@ class FakeSim:
 
 class StraightRoad:
     def route(self, edges, depart_lane=None):
-        return np.array([[0.0, 0.0], [100.0, 0.0]]), (), np.zeros((0, 2))
+        return np.array([[0.0, 0.0], [100.0, 0.0]]), (), np.zeros((0, 2)), ()
 
 
 def test_loop_takes_over_drives_and_retires_at_the_goal_with_a_fake_simulator():
