@@ -10,6 +10,7 @@ import datetime
 import pathlib
 import shutil
 import sys
+import tempfile
 
 from sumo_avoid import outputs as evaluate
 from sumo_avoid.control import CONTROLLERS
@@ -18,7 +19,7 @@ from sumo_avoid.rollout import runner
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.spec import format_reference
 from sumo_avoid.studies import batch, report, reproduce, suite
-from sumo_avoid.sumo.sim import SumoStartError
+from sumo_avoid.sumo import console
 
 EXIT_BAD_INPUT = 2
 
@@ -63,16 +64,19 @@ def cmd_run(args) -> int:
     if out is None:
         stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
         out = pathlib.Path("reports") / "runs" / f"{scn.name}-{scn.spec.ego.controller}-s{scn.spec.sim.seed}-{stamp}"
-    created = not out.exists()
-    out.mkdir(parents=True, exist_ok=True)
-    try:
-        res = runner.run(scn, log_file=out / "sumo.log", progress=not args.quiet and sys.stdout.isatty())
-    except SumoStartError as e:  # the run never started: leave nothing behind
-        if created:
-            shutil.rmtree(out, ignore_errors=True)
-        raise ScenarioError(str(scn.path), "sim", "files SUMO can load", show_got=False) from e
+    with tempfile.TemporaryDirectory(prefix="sumo-avoid-run-") as tmp:  # nothing in OUT until the run is good
+        log, native = pathlib.Path(tmp) / "sumo.log", pathlib.Path(tmp) / "stderr.txt"
+        try:
+            with console.sumo_console_to(native):  # SUMO's warnings: sumo.log only, counted below
+                res = runner.run(scn, log_file=log, progress=not args.quiet and sys.stdout.isatty())
+        finally:
+            for line in console.leftover(native, log):
+                print(line, file=sys.stderr)
+        out.mkdir(parents=True, exist_ok=True)
+        shutil.move(log, out / "sumo.log")
     m = evaluate.write_outputs(res, out, plots=scn.spec.output.plots and not args.no_plots)
     print(_summary(m, out))
+    print(f"  {console.summary_line(out / 'sumo.log')}")
     return 0
 
 

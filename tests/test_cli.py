@@ -1,11 +1,16 @@
 """Bad input through the real CLI: exit code 2, one line on stderr naming file and key, no traceback,
 nothing written; and a good run writes its outputs."""
 import json
+import math
 import subprocess
 import sys
 
+import numpy as np
+import pandas as pd
 import pytest
-from conftest import SCENARIOS, cli_in_process
+from conftest import ROOT, SCENARIOS, cli_in_process
+
+NETS = ROOT / "nets"
 
 GOOD = (SCENARIOS / "overtaking.toml").read_text()
 
@@ -35,6 +40,10 @@ CASES = {
     "goal_off_net": (GOOD.replace("goal_tolerance_m = 5.0", "goal_tolerance_m = 5.0\ngoal = [500.0, 300.0]"),
                      "ego.goal", "drivable area"),
     "param_negative": (GOOD + "\n[controllers.apf_sa]\nk_rep = -1.0\n", "controllers.apf_sa.k_rep", "non-negative"),
+    "goal_edge_unknown": (GOOD.replace("goal_tolerance_m = 5.0", 'goal_tolerance_m = 5.0\ngoal = "nowhere"'),
+                          "ego.goal", "an edge id of the network"),
+    "goals_unknown_ego": (GOOD + '\n[ego.goals]\nnobody = "road"\n', "ego.goals.nobody", "an ego id"),
+    "goals_bad_point": (GOOD + "\n[ego.goals]\nego = [1.0, 2.0, 3.0]\n", "ego.goals.ego", "[x, y] or an edge id"),
 }
 
 
@@ -72,6 +81,13 @@ def test_run_writes_outputs(tmp_path):
                 "time_to_goal_s", "path_length_m", "mean_speed_mps"):
         assert key in m
     assert m["sim_time_s"] == pytest.approx(20.0, abs=0.11)
+    traj = pd.read_csv(out / "trajectories.csv")
+    assert traj["heading"].gt(-math.pi).all() and traj["heading"].le(math.pi).all()
+    west = traj[traj["id"] == "cross1"]  # E2C -> C2W: SUMO's compass 270 deg was written as -pi before
+    assert np.allclose(west["heading"].abs(), math.pi, atol=0.05) and west["heading"].gt(0).any()
+    n = sum(ln.startswith("Warning: ") for ln in (out / "sumo.log").read_text().splitlines())
+    assert r.stdout.strip().splitlines()[-1].strip() == f"sumo.log: {n} warning{'' if n == 1 else 's'}"
+    assert "Warning: " not in r.stderr
     assert (out / "trajectory.png").stat().st_size > 20_000
     assert (out / "trajectories.csv").stat().st_size > 0
     assert "collisions" in r.stdout
@@ -89,5 +105,54 @@ def test_route_file_sumo_cannot_load(tmp_path):
         path.unlink()
         routes.unlink()
     assert r.returncode == 2
-    assert len(r.stderr.strip().splitlines()) == 1 and "'sim'" in r.stderr and "nope" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and "'sim.routes[0]'" in r.stderr and "nope" in r.stderr
+    assert f"{routes}, vehicle 'ego'" in r.stderr
     assert not out.exists()
+
+
+def test_an_unknown_edge_in_a_trip_names_the_route_file_and_the_trip(tmp_path):
+    """SUMO's message names the trip, not the file: the line names the file that defines it."""
+    (tmp_path / "types.rou.xml").write_text('<routes>\n  <vType id="car" length="4.5"/>\n</routes>\n')
+    (tmp_path / "trips.rou.xml").write_text('<routes>\n  <trip id="ego" type="car" from="road" to="road" depart="0"/>\n'
+                                            '  <trip id="t7" type="car" from="nope" to="road" depart="1"/>\n</routes>\n')
+    path = tmp_path / "trip.toml"
+    path.write_text(f'name = "trip"\n[sim]\nnet = "{NETS / "overtaking.net.xml"}"\n'
+                    'routes = ["types.rou.xml", "trips.rou.xml"]\n[ego]\nids = ["ego"]\n')
+    out = tmp_path / "out"
+    r = cli("run", path, "--out", out)
+    assert r.returncode == 2
+    line, = r.stderr.strip().splitlines()
+    assert line.startswith(f"sumo-avoid: error: {path}: key 'sim.routes[1]': expected a file SUMO can load: "
+                           f"{tmp_path / 'trips.rou.xml'}, trip 't7' (SUMO: The edge 'nope' within the route for trip 't7'")
+    assert not out.exists()
+
+
+def test_an_ego_that_never_departs_exits_2_and_writes_nothing(tmp_path):
+    (tmp_path / "r.rou.xml").write_text('<routes>\n  <trip id="ego" from="road" to="road" depart="0"/>\n'
+                                        '  <trip id="late" from="road" to="road" depart="60"/>\n</routes>\n')
+    path = tmp_path / "late.toml"
+    path.write_text(f'name = "late"\n[sim]\nnet = "{NETS / "overtaking.net.xml"}"\nroutes = ["r.rou.xml"]\n'
+                    'duration_s = 3.0\n[ego]\nids = ["ego", "late"]\n')
+    out = tmp_path / "out"
+    out.mkdir()  # an existing folder stays as it was: empty
+    r = cli("run", path, "--out", out, "--quiet")
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.strip().splitlines() == [
+        (f"sumo-avoid: error: {path}: key 'ego.ids[1]': expected egos that depart within the run: 'late' never "
+         "departed by t=3.0 s (its depart time is later, or SUMO dropped it)")]
+    assert list(out.iterdir()) == []
+    r = cli("run", path, "--out", tmp_path / "ok", "--quiet", "--no-plots", "--set", "sim.duration_s=61")
+    assert r.returncode == 0, r.stderr  # it departs at 60 s: a normal run
+
+
+def test_sumo_warnings_go_to_sumo_log_and_are_counted(tmp_path):
+    """crash_straight: SUMO warns of the commanded collision; the line is in sumo.log, not on the
+    terminal, and the run ends with the count."""
+    out = tmp_path / "crash"
+    r = cli("run", SCENARIOS / "crash_straight.toml", "--out", out, "--quiet", "--no-plots")
+    assert r.returncode == 0, r.stderr
+    log = (out / "sumo.log").read_text()
+    warnings = [ln for ln in log.splitlines() if ln.startswith("Warning: ")]
+    assert len(warnings) == 1 and "collision with vehicle 'parked'" in warnings[0]
+    assert "Warning" not in r.stderr
+    assert r.stdout.strip().splitlines()[-1].strip() == "sumo.log: 1 warning"

@@ -59,6 +59,8 @@ def _type_name(tp) -> str:
         return " or ".join(_type_name(a) for a in typing.get_args(tp))
     if origin in (tuple, list):
         return f"a list of {_type_name(typing.get_args(tp)[0])}"
+    if origin is dict:
+        return f"a table of ({_type_name(typing.get_args(tp)[1])})"
     return {float: "a number", int: "an integer", str: "a string", bool: "true/false",
             type(None): "nothing"}.get(tp, getattr(tp, "__name__", str(tp)))
 
@@ -122,8 +124,11 @@ def _coerce(value, tp, file: str, key: str, meta):
         return build(tp, value, file, key)
     if tp is dict or typing.get_origin(tp) is dict:
         if not isinstance(value, dict):
-            raise ScenarioError(file, key, "a table", value)
-        return value
+            raise ScenarioError(file, key, _type_name(tp) if typing.get_args(tp) else "a table", value)
+        if not typing.get_args(tp):
+            return value
+        item_tp = typing.get_args(tp)[1]  # dict[str, X]: every value is checked as X
+        return {k: _coerce(v, item_tp, file, f"{key}.{k}", meta) for k, v in value.items()}
     raise TypeError(f"unsupported field type {tp!r}")  # programming error, not user input
 
 

@@ -29,7 +29,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from sumo_avoid.sumo.road import Road
 
-__all__ = ["plot_trajectories", "plot_timeseries", "footprint_corners"]
+__all__ = ["footprint_corners", "plot_timeseries", "plot_trajectories", "track_xy"]
 
 ROAD_FILL = "#a9a9a9"
 OFFROAD_FILL = "#eef1ea"
@@ -234,7 +234,7 @@ def _draw(ax, road, groups, ego_ids, other_ids, obstacles, goals, coll, labels: 
     for i, vid in enumerate(other_ids):
         g = groups[vid]
         col = OTHER_COLOURS[i % len(OTHER_COLOURS)]
-        ax.plot(g["x"], g["y"], color=col, lw=1.3, alpha=0.9, zorder=2)
+        ax.plot(*track_xy(g), color=col, lw=1.3, alpha=0.9, zorder=2, gid=f"track:{vid}")
         outline(g, [0, len(g) - 1] if len(g) > 1 else [0], col, 1.1, 2)
     if other_ids:
         handles.append(Line2D([], [], color=OTHER_COLOURS[0], lw=1, label=f"other vehicles ({len(other_ids)})"))
@@ -242,7 +242,7 @@ def _draw(ax, road, groups, ego_ids, other_ids, obstacles, goals, coll, labels: 
     for i, vid in enumerate(ego_ids):
         g = groups[vid]
         col = EGO_COLOURS[i % len(EGO_COLOURS)]
-        ax.plot(g["x"], g["y"], color=col, lw=2.6, zorder=5, solid_capstyle="round")
+        ax.plot(*track_xy(g), color=col, lw=2.6, zorder=5, solid_capstyle="round", gid=f"track:{vid}")
         t = g["time_s"].to_numpy(float)
         bucket = np.floor((t - t[0]) / 2.0 + 1e-9)
         rows = np.flatnonzero(np.r_[True, np.diff(bucket) > 0])
@@ -270,6 +270,20 @@ def _draw(ax, road, groups, ego_ids, other_ids, obstacles, goals, coll, labels: 
                               label=f"collision ({len(coll)})"))
 
     return handles
+
+
+def track_xy(g) -> tuple[np.ndarray, np.ndarray]:
+    """x, y of one vehicle's rows (in step order) with a NaN between the pieces of its recording, so
+    the line breaks where it left the recording and came back (outside ``output.record_radius_m``
+    of every ego for a while: steps missing), instead of a straight line across the map."""
+    x, y = g["x"].to_numpy(float), g["y"].to_numpy(float)
+    if "step" in g:
+        gaps = np.diff(g["step"].to_numpy(float)) > 1.5
+    else:
+        dt = np.diff(g["time_s"].to_numpy(float))
+        gaps = dt > 1.5 * np.min(dt[dt > 0], initial=np.inf)
+    cut = np.flatnonzero(gaps) + 1
+    return (np.insert(x, cut, np.nan), np.insert(y, cut, np.nan)) if len(cut) else (x, y)
 
 
 def _zoom_centre(groups, ego_ids, coll):

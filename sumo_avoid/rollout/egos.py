@@ -4,16 +4,19 @@ from __future__ import annotations
 
 import numpy as np
 
+from sumo_avoid.core.config import FieldError
+from sumo_avoid.core.polyline import polyline_point_at
 from sumo_avoid.core.snapshot import Snapshot
 from sumo_avoid.core.types import EgoTask
 
 
 class EgoBook:
-    def __init__(self, ego_ids, road, *, goal=None, goal_tolerance_m: float, cruise_speed_mps: float,
+    def __init__(self, ego_ids, road, *, goal=None, goals=None, goal_tolerance_m: float, cruise_speed_mps: float,
                  uses_goals: bool = True):
         self.ids = frozenset(ego_ids)
         self.road = road
-        self.goal = goal  # [x, y] for every ego, or None: the end of each ego's route path
+        self.goal = goal  # every ego's goal: [x, y], an edge id, or None: the end of each ego's route path
+        self.goal_of = dict(goals or {})  # ego id -> its own goal ([x, y] or edge id), before ``goal``
         self.goal_tolerance_m = goal_tolerance_m
         self.cruise_speed_mps = cruise_speed_mps
         self.uses_goals = uses_goals
@@ -29,13 +32,35 @@ class EgoBook:
     def take_over(self, sim, vid: str) -> EgoTask:
         info = sim.take_over(vid)
         path, links, limits, lanes = self.road.route(list(info.route_edges), depart_lane=info.lane_index)
-        goal = np.asarray(self.goal if self.goal is not None else path[-1], float)
+        goal = self._goal_point(vid, list(info.route_edges), path, links)
         if self.uses_goals:
             self.goals[vid] = (float(goal[0]), float(goal[1]))
         task = EgoTask(vid, goal, path, self.cruise_speed_mps, links, limits, lanes)
         self.active[vid] = task
         self.tasks[vid] = task
         return task
+
+    def _goal_point(self, vid: str, edges: list[str], path: np.ndarray, links) -> np.ndarray:
+        """(2,) goal of one ego: its point, or where its route path leaves its goal edge (the stop
+        line of the junction link after that edge; the path's end on the last edge), or the path's end.
+        Raises FieldError (naming the scenario key) for a goal edge that is not on the ego's route."""
+        key = f"ego.goals.{vid}" if vid in self.goal_of else "ego.goal"
+        goal = self.goal_of.get(vid, self.goal)
+        if goal is None or (isinstance(goal, str) and not self.uses_goals):
+            return np.asarray(path[-1], float)
+        if not isinstance(goal, str):
+            return np.asarray(goal, float)
+        if goal not in edges:
+            shown = " ".join(edges[:12]) + (f" ... ({len(edges)} edges)" if len(edges) > 12 else "")
+            raise FieldError(key, f"an edge on the route SUMO gave ego '{vid}' ({shown})", goal)
+        k = edges.index(goal)
+        if k == len(edges) - 1:
+            return np.asarray(path[-1], float)
+        return np.asarray(polyline_point_at(path, links[k].s_stop_m), float)
+
+    def never_departed(self) -> list[str]:
+        """Egos SUMO never inserted (not taken over), sorted."""
+        return sorted(self.ids - set(self.tasks))
 
     def retire(self, sim, snap: Snapshot) -> list[str]:
         """Egos gone from the network on their own, then those whose centre is within the goal

@@ -1,7 +1,7 @@
 """Per-step recording of the world into arrays; becomes one pandas table after the run.
 
 Egos are always recorded; other vehicles only within ``record_radius_m`` of an ego (0 = all), to
-keep big-traffic runs small. SUMO's own collision reports are kept beside, one event per pair and
+keep big-traffic runs small. Headings are written wrapped to (-pi, pi]. SUMO's own collision reports are kept beside, one event per pair and
 contact episode (consecutive steps), the same rule as the plug-in's own events.
 """
 from __future__ import annotations
@@ -13,6 +13,13 @@ from sumo_avoid.core.geometry import near_any
 from sumo_avoid.core.snapshot import Snapshot
 
 COLUMNS = ["step", "time_s", "id", "is_ego", "x", "y", "vx", "vy", "speed", "heading", "length", "width"]
+
+
+def wrap_angle(a) -> np.ndarray:
+    """Angles (rad) wrapped to (-pi, pi]: SUMO's compass angle turned into a math heading spans
+    (-3 pi/2, pi/2], and an actuator's integrated heading any multiple of 2 pi."""
+    w = np.pi - np.mod(np.pi - np.asarray(a, float), 2.0 * np.pi)
+    return np.where(w <= -np.pi, w + 2.0 * np.pi, w)
 
 
 class Recorder:
@@ -65,7 +72,7 @@ class Recorder:
             "is_ego": np.concatenate([c[3] for c in self._chunks]),
             "x": pos[:, 0], "y": pos[:, 1], "vx": vel[:, 0], "vy": vel[:, 1],
             "speed": np.hypot(vel[:, 0], vel[:, 1]),
-            "heading": np.concatenate([c[6] for c in self._chunks]),
+            "heading": wrap_angle(np.concatenate([c[6] for c in self._chunks])),
             "length": np.concatenate([c[7] for c in self._chunks]),
             "width": np.concatenate([c[8] for c in self._chunks]),
         })

@@ -9,6 +9,7 @@ import time
 
 from tqdm import tqdm
 
+from sumo_avoid.core.config import FieldError, ScenarioError
 from sumo_avoid.core.interfaces import Context
 from sumo_avoid.rollout.arena import ArenaSpawn, StaticObstacles, square
 from sumo_avoid.rollout.assemble import assemble, controller_for
@@ -16,8 +17,9 @@ from sumo_avoid.rollout.egos import EgoBook
 from sumo_avoid.rollout.loop import rollout
 from sumo_avoid.rollout.recorder import Recorder
 from sumo_avoid.rollout.result import RunResult, Scene
+from sumo_avoid.scenario.spec import sumo_load_error
 from sumo_avoid.sumo.road import Road
-from sumo_avoid.sumo.sim import SumoSim, sumo_args
+from sumo_avoid.sumo.sim import SumoSim, SumoStartError, sumo_args
 
 
 class Progress:
@@ -34,7 +36,23 @@ class Progress:
         self.bar.close()
 
 
+def never_departed_error(scn, missing: list[str], time_s: float, waiting) -> ScenarioError:
+    """An ego that never departed within the run is bad input (a depart time after the end, or a
+    vehicle SUMO could not insert): one line naming the first such ego and why, as far as SUMO tells."""
+    vid = missing[0]
+    ids = scn.spec.ego.ids
+    key = f"ego.ids[{ids.index(vid)}]" if vid in ids else "arena"
+    why = ("SUMO could not insert it: still waiting for room to depart" if vid in waiting else
+           "its depart time is later, or SUMO dropped it")
+    more = f"; also {', '.join(repr(v) for v in missing[1:])}" if len(missing) > 1 else ""
+    return ScenarioError(str(scn.path), key, f"egos that depart within the run: '{vid}' never departed by "
+                                             f"t={time_s:.1f} s ({why}){more}", show_got=False)
+
+
 def run(scn, *, log_file=None, progress: bool = False) -> RunResult:
+    """Run one scenario. Raises :class:`ScenarioError` (one line, naming the scenario file and key)
+    for input found bad only once SUMO runs: files SUMO cannot load, a goal edge not on an ego's
+    route, an ego that never departed."""
     spec = scn.spec
     t_start = time.perf_counter()
     arena = spec.arena
@@ -45,19 +63,28 @@ def run(scn, *, log_file=None, progress: bool = False) -> RunResult:
     controller = controller_for(scn, ctx)
     recorder = Recorder(spec.output.record_radius_m)
     hooks = [StaticObstacles(spec.obstacles, obstacles)] + ([ArenaSpawn(arena, walls, obstacles, ctx.rng(1))] if arena else [])
-    egos = EgoBook(set(spec.ego.ids) | set(arena.ids if arena else ()), road, goal=spec.ego.goal,
+    egos = EgoBook(set(spec.ego.ids) | set(arena.ids if arena else ()), road, goal=spec.ego.goal, goals=spec.ego.goals,
                    goal_tolerance_m=spec.ego.goal_tolerance_m, cruise_speed_mps=spec.ego.cruise_speed_mps,
                    uses_goals=type(controller).needs.goals)
     args = sumo_args(scn.net_file, scn.route_files, scn.additional_files, spec.sim.step_s, spec.sim.seed,
                      spec.sim.lateral_resolution_m, log_file, sumo_collisions=spec.sim.sumo_collisions and arena is None)
     t_loop = time.perf_counter()
-    with SumoSim(args) as sim:
+    try:
+        sim = SumoSim(args)
+    except SumoStartError as e:
+        raise sumo_load_error(scn, str(e)) from None
+    with sim:
         stack = assemble(scn, Context(spec.sim.seed, sim.step_s, road, walls, obstacles), controller)
         for hook in hooks:
             hook.setup(sim)
-        steps = rollout(sim, stack, egos, recorder, int(round(spec.sim.duration_s / sim.step_s)),
-                        [Progress(spec.sim.duration_s)] if progress else [])
+        try:
+            steps = rollout(sim, stack, egos, recorder, int(round(spec.sim.duration_s / sim.step_s)),
+                            [Progress(spec.sim.duration_s)] if progress else [])
+        except FieldError as e:  # a goal edge not on the route SUMO gave the ego
+            raise ScenarioError(str(scn.path), e.key, e.expected, e.got, show_got=e.show_got) from None
         sim_time = sim.time_s
+        if egos.never_departed():
+            raise never_departed_error(scn, egos.never_departed(), sim_time, sim.waiting())
     t_end = time.perf_counter()
     return RunResult(scn, Scene(road, walls, obstacles), recorder.table(), recorder.sumo_events(), egos.goals,
                      steps, sim_time, stack.stats(),

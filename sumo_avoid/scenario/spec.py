@@ -10,6 +10,7 @@ from __future__ import annotations
 import functools
 import math
 import pathlib
+import re
 import sys
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
@@ -19,7 +20,7 @@ import numpy as np
 from sumo_avoid.actuation import ACTUATORS
 from sumo_avoid.actuation.params import ActuatorConfig
 from sumo_avoid.control import CONTROLLERS
-from sumo_avoid.core.config import ScenarioError, build, describe, field_doc
+from sumo_avoid.core.config import FieldError, ScenarioError, build, describe, field_doc
 from sumo_avoid.metrics import METRICS
 from sumo_avoid.safety import LAYERS, RULES
 from sumo_avoid.safety.danger_time import DangerTimeParams
@@ -64,13 +65,21 @@ class EgoConfig:
     rules: str = field_doc("traffic", doc="traffic rules layer: 'traffic' (signals, road speed; [rules] table) "
                                           "or 'none' (a study of rule-free controllers)")
     cruise_speed_mps: float = field_doc(20.0, doc="desired cruising speed, m/s")
-    goal: tuple[float, ...] | None = field_doc(None, signed=True,
-                                               doc="goal [x, y] in net coordinates, m; default: end of each ego's route")
+    goal: tuple[float, ...] | str | None = field_doc(
+        None, signed=True, doc="goal of every ego: [x, y] in net coordinates, m, or an edge id (the goal is where "
+                               "the ego's route path leaves that edge, the first time if it passes twice); "
+                               "default: end of each ego's route")
+    goals: dict[str, tuple[float, ...] | str] = field_doc(
+        default_factory=dict, signed=True, doc="[ego.goals] table, a goal per ego: EGO_ID = [x, y] or \"EDGE_ID\" "
+                                               "(as ego.goal; quote ids with dots); egos not in it take ego.goal")
     goal_tolerance_m: float = field_doc(5.0, doc="the goal is reached when an ego centre comes this close, m")
 
     def __post_init__(self):
-        if self.goal is not None and len(self.goal) != 2:
-            raise ValueError("ego.goal = [x, y]")
+        for key, goal in (("goal", self.goal), *((f"goals.{v}", g) for v, g in self.goals.items())):
+            if isinstance(goal, tuple) and len(goal) != 2:
+                raise FieldError(key, "[x, y] or an edge id", list(goal))
+            if goal == "":
+                raise FieldError(key, "[x, y] or a non-empty edge id", goal)
 
 
 @dataclass(frozen=True)
@@ -240,44 +249,98 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     routes = tuple(existing(r, f"sim.routes[{i}]", "SUMO route") for i, r in enumerate(spec.sim.routes))
     adds = tuple(existing(r, f"sim.additional[{i}]", "SUMO additional") for i, r in enumerate(spec.sim.additional))
     _check_ego_ids(spec.ego.ids, routes + adds, file)
-    if spec.ego.goal is not None:
-        try:
-            road = Road.from_net_file(net)
-        except Exception as e:  # sumolib raises many kinds
-            raise ScenarioError(file, "sim.net", f"a readable SUMO network ({type(e).__name__})", spec.sim.net) from None
-        off = float(road.outside_distance([spec.ego.goal])[0])
-        if not math.isfinite(off) or off > 0.5:
-            raise ScenarioError(file, "ego.goal", f"a point on the network's drivable area ({off:.1f} m off it)",
-                                list(spec.ego.goal))
+    _check_goals(spec, net, file)
     return Scenario(spec, path, net, routes, adds, params)
 
 
-@functools.lru_cache(maxsize=64)
-def _vehicles_in(path: str, mtime_ns: int, size: int) -> tuple[frozenset[str], frozenset[str]]:
-    """(vehicle and trip ids, flow ids) of one SUMO route/additional file, parsed once per version
-    (a batch loads the same scenario for every seed); a file that is not XML is left for SUMO to
-    reject (with its own reason) when the run starts."""
-    ids, flows = set(), set()
+def _check_goals(spec: ScenarioSpec, net: pathlib.Path, file: str) -> None:
+    """Per-ego goals name egos; a point goal lies on the drivable area; an edge goal is a normal
+    edge of the net (whether it is on the ego's route is known when SUMO has routed the ego)."""
+    egos = (*spec.ego.ids, *(spec.arena.ids if spec.arena is not None else ()))
+    for vid in spec.ego.goals:
+        if vid not in egos:
+            raise ScenarioError(file, f"ego.goals.{vid}", f"an ego id (ego.ids: {list(spec.ego.ids)})", vid,
+                                show_got=False)
+    goals = [("ego.goal", spec.ego.goal)] + [(f"ego.goals.{v}", g) for v, g in spec.ego.goals.items()]
+    for key, goal in goals:
+        if isinstance(goal, str):
+            st = net.stat()
+            if goal not in _edges_in(str(net), st.st_mtime_ns, st.st_size):
+                raise ScenarioError(file, key, f"an edge id of the network {spec.sim.net}", goal)
+        elif goal is not None:
+            try:
+                road = Road.from_net_file(net)
+            except Exception as e:  # sumolib raises many kinds
+                raise ScenarioError(file, "sim.net", f"a readable SUMO network ({type(e).__name__})",
+                                    spec.sim.net) from None
+            off = float(road.outside_distance([goal])[0])
+            if not math.isfinite(off) or off > 0.5:
+                raise ScenarioError(file, key, f"a point on the network's drivable area ({off:.1f} m off it)",
+                                    list(goal))
+
+
+@functools.lru_cache(maxsize=16)
+def _edges_in(path: str, mtime_ns: int, size: int) -> frozenset[str]:
+    """Ids of the normal (not internal) edges of a SUMO network, parsed once per version."""
+    out = set()
     try:
         for _, el in ET.iterparse(path):
-            if el.tag in ("vehicle", "trip") and "id" in el.attrib:
-                ids.add(el.attrib["id"])
-            elif el.tag == "flow" and "id" in el.attrib:
-                flows.add(el.attrib["id"])
+            kind = el.attrib.get("function", "normal")
+            if el.tag == "edge" and "id" in el.attrib and kind not in ("internal", "crossing", "walkingarea"):
+                out.add(el.attrib["id"])
             el.clear()
     except (ET.ParseError, OSError):
         pass
-    return frozenset(ids), frozenset(flows)
+    return frozenset(out)
+
+
+_DEFINED = ("vehicle", "trip", "flow", "route", "person", "container")
+
+
+@functools.lru_cache(maxsize=64)
+def _elements_in(path: str, mtime_ns: int, size: int) -> frozenset[tuple[str, str]]:
+    """(tag, id) of the vehicles, trips, flows and routes of one SUMO route/additional file, parsed
+    once per version (a batch loads the same scenario for every seed); a file that is not XML is
+    left for SUMO to reject (with its own reason) when the run starts."""
+    out = set()
+    try:
+        for _, el in ET.iterparse(path):
+            if el.tag in _DEFINED and "id" in el.attrib:
+                out.add((el.tag, el.attrib["id"]))
+            el.clear()
+    except (ET.ParseError, OSError):
+        pass
+    return frozenset(out)
+
+
+def _elements(f) -> frozenset[tuple[str, str]]:
+    st = pathlib.Path(f).stat()
+    return _elements_in(str(f), st.st_mtime_ns, st.st_size)
 
 
 def _defined_vehicles(files) -> tuple[set[str], set[str]]:
+    """(vehicle and trip ids, flow ids) of the files."""
     ids, flows = set(), set()
     for f in files:
-        st = pathlib.Path(f).stat()
-        i, fl = _vehicles_in(str(f), st.st_mtime_ns, st.st_size)
-        ids |= i
-        flows |= fl
+        els = _elements(f)
+        ids |= {vid for tag, vid in els if tag in ("vehicle", "trip")}
+        flows |= {vid for tag, vid in els if tag == "flow"}
     return ids, flows
+
+
+def sumo_load_error(scn: Scenario, message: str) -> ScenarioError:
+    """SUMO's refusal to load the scenario's files as one line naming the file: when SUMO's message
+    names a trip, vehicle, flow or route (e.g. "The edge 'x' within the route for trip 't' is not
+    known"), the route or additional file that defines it (key ``sim.routes[i]``), else key ``sim``."""
+    sumo = " ".join(message.split())
+    keyed = [(f"sim.routes[{i}]", f) for i, f in enumerate(scn.route_files)]
+    keyed += [(f"sim.additional[{i}]", f) for i, f in enumerate(scn.additional_files)]
+    for tag, eid in re.findall(r"\b(" + "|".join(_DEFINED) + r") '([^']*)'", sumo):
+        for key, f in keyed:
+            if (tag, eid) in _elements(f):
+                return ScenarioError(str(scn.path), key, f"a file SUMO can load: {f}, {tag} '{eid}' (SUMO: {sumo})",
+                                     show_got=False)
+    return ScenarioError(str(scn.path), "sim", f"files SUMO can load (SUMO: {sumo})", show_got=False)
 
 
 def _check_ego_ids(ego_ids, files, file: str) -> None:
@@ -302,6 +365,19 @@ def format_reference() -> str:
              "section; `[controllers.NAME]` holds the parameters of controller NAME (only the chosen",
              "controller's table is used, every table is validated). Any key can be overridden from the",
              "command line with `--set dotted.key=VALUE` (VALUE is read as TOML).", "",
+             "**Goals.** By default each ego's goal is the end of its route. `ego.goal` sets every ego's goal,",
+             "`[ego.goals]` one ego's (it wins over `ego.goal`); each is a point `[x, y]` or an edge id, meaning",
+             "the point where the ego's reference path leaves that edge (the stop line at the junction after it;",
+             "the route's end if it is the route's last edge):", "",
+             "```toml", "[ego]", 'ids = ["ego", "ego2", "flow.0"]', 'goal = "C2W"             # every ego: where its route leaves C2W',
+             "", "[ego.goals]", "ego2 = [-120.0, 1.6]      # but ego2: this point",
+             '"flow.0" = "S2C"          # ids with dots are quoted', "```", "",
+             "A point must lie on the drivable area and an edge must be a normal edge of the net (checked on",
+             "load); an edge must also be on the route SUMO gives that ego (trips are routed when they depart:",
+             "checked then). An ego that never departs within `sim.duration_s` (a later depart time, or a",
+             "vehicle SUMO could not insert) is an error as well. Such errors found while running stop the run:",
+             "`sumo-avoid run` prints one line naming the file and key and exits with code 2, writing nothing;",
+             "in a batch the run is recorded failed with that line.", "",
              "| key | type | default | meaning |", "|---|---|---|---|"]
     for key, tp, default, doc in describe(ScenarioSpec):
         if key == "controllers":

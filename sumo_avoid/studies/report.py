@@ -1,9 +1,10 @@
 """``sumo-avoid report LEDGER_OR_RUN_DIR --out FILE.html``: a self-contained study report.
 
 The HTML file needs nothing else: images are PNGs embedded as base64 ``data:`` URIs, styles are
-inline, there are no scripts and no links to fetch. Sections: a controller x scenario table,
-per-scenario trajectory plots on the road geometry, box plots of each metric across seeds, time
-series of gap and speed for one chosen run, every run, and the failed runs with their errors.
+inline, there are no scripts and no links to fetch. Sections: a table per scenario x controller x
+every dimension the batch varied (:func:`varied`: --set and grid keys whose value differs between
+runs), a trajectory plot on the road geometry per such group, box plots of each metric across
+seeds, time series of gap and speed for one chosen run, every run, and the failed runs with their errors.
 ``--md`` / ``--csv`` export the summary table as Markdown and the runs table as CSV.
 
 The input is a ledger (``.sqlite``), a folder holding ``ledger.sqlite``, or a folder of run
@@ -57,10 +58,46 @@ def load_runs(src) -> tuple:
     return pd.DataFrame(rows), src.resolve()
 
 
+GROUP = ["scenario", "controller"]
+SCENARIO_VALUE = "(scenario)"  # a key a run did not override: the scenario file's value
+_NOT_DIMENSIONS = {"ego.controller", "sim.seed"}  # shown as the controller and seed columns
+
+
+def _overrides(text) -> dict:
+    """A ledger row's ``overrides`` (JSON list of KEY=VALUE: --set and grid points) as key -> value text."""
+    try:
+        items = json.loads(text) if isinstance(text, str) else []
+    except ValueError:
+        items = []
+    out = {}
+    for item in items if isinstance(items, list) else []:
+        key, _, value = str(item).partition("=")
+        out[key.strip()] = value.strip().strip('"')
+    return out
+
+
+def varied(df) -> tuple:
+    """(runs, group columns): scenario, controller, then every --set / grid key whose value differs
+    between the runs (e.g. ego.sensor, controllers.apf_sa.k_rep), each added as a column of its value
+    in that run, or "(scenario)" where the run kept the scenario file's."""
+    if "overrides" not in df or df.empty:
+        return df, list(GROUP)
+    parsed = [_overrides(v) for v in df["overrides"]]
+    keys = sorted({k for p in parsed for k in p} - _NOT_DIMENSIONS)
+    dims = [k for k in keys if len({p.get(k, SCENARIO_VALUE) for p in parsed}) > 1]
+    return df.assign(**{k: [p.get(k, SCENARIO_VALUE) for p in parsed] for k in dims}), [*GROUP, *dims]
+
+
+def _label(key, group) -> str:
+    return " · ".join(f"{c.rsplit('.', 1)[-1]}={v}" if "." in c else str(v) for c, v in zip(group, key))
+
+
 def summary(df):
-    """Controller x scenario table: runs, failures and aggregate metrics over done runs."""
+    """Table of runs, failures and aggregate metrics over done runs, a row per scenario x controller
+    x every value of what the batch varied (:func:`varied`)."""
+    df, group = varied(df)
     rows = []
-    for (scn, ctl), g in df.groupby(["scenario", "controller"], sort=True, dropna=False):
+    for key, g in df.groupby(group, sort=True, dropna=False):
         d = g[g["status"] == "done"]
 
         def agg(col, fn):
@@ -68,7 +105,7 @@ def summary(df):
                 return None
             return float(getattr(d[col].dropna().astype(float), fn)())
 
-        rows.append({"scenario": scn, "controller": ctl, "runs": len(g), "done": len(d), "failed": len(g) - len(d),
+        rows.append({**dict(zip(group, key)), "runs": len(g), "done": len(d), "failed": len(g) - len(d),
                      "goal_reached_rate": agg("goal_reached", "mean"), "collisions_total": agg("collisions", "sum"),
                      "min_gap_m_min": agg("min_gap_m", "min"), "phi_wall_max": agg("phi_wall", "max"),
                      "phi_coll_mean": agg("phi_coll", "mean"), "mean_speed_mps_mean": agg("mean_speed_mps", "mean")})
@@ -91,11 +128,12 @@ def _img(b64: str, alt: str) -> str:
 
 def box_plots(df) -> str | None:
     """One panel per metric: a box per scenario/controller over its done runs' seeds."""
+    df, group = varied(df)
     d = df[df["status"] == "done"]
     cols = [c for c in METRICS if c in d and d[c].notna().any()]
     if not cols or d.empty:
         return None
-    groups = list(d.groupby(["scenario", "controller"], sort=True))
+    groups = list(d.groupby(group, sort=True))
     n = len(cols)
     ncol = min(3, n)
     nrow = -(-n // ncol)
@@ -103,7 +141,7 @@ def box_plots(df) -> str | None:
     for i, c in enumerate(cols):
         ax = fig.add_subplot(nrow, ncol, i + 1)
         data = [g[c].dropna().astype(float).to_numpy() for _, g in groups]
-        labels = [f"{s}\n{k}" for (s, k), _ in groups]
+        labels = [_label(k, group).replace(" · ", "\n") for k, _ in groups]
         try:
             ax.boxplot(data, tick_labels=labels, showmeans=True)
         except TypeError:  # matplotlib < 3.9
@@ -181,6 +219,7 @@ CSS = ("body{font-family:sans-serif;margin:2em;max-width:1400px}table{border-col
 
 
 def build_html(df, base: pathlib.Path, title: str, run_key: str | None = None) -> str:
+    df, group = varied(df)
     summ = summary(df)
     done = df[df["status"] == "done"].sort_values(["scenario", "controller", "seed", "key"])
     failed = df[df["status"] != "done"]
@@ -188,14 +227,14 @@ def build_html(df, base: pathlib.Path, title: str, run_key: str | None = None) -
              f"<style>{CSS}</style></head><body><h1>{html.escape(title)}</h1>",
              f"<p>{len(df)} runs: {len(done)} done, {len(failed)} failed. Generated "
              f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC by sumo-avoid report.</p>",
-             "<h2>Controller &times; scenario</h2>", f'<div id="summary">{_table_html(summ, list(summ.columns))}</div>']
-    parts.append("<h2>Trajectories on the road (one run per scenario and controller, lowest seed)</h2>")
-    for (scn, ctl), g in done.groupby(["scenario", "controller"], sort=True):
+             f"<h2>{' &times; '.join(html.escape(c) for c in group)}</h2>", f'<div id="summary">{_table_html(summ, list(summ.columns))}</div>']
+    parts.append(f"<h2>Trajectories on the road (one run per {' × '.join(group)}, lowest seed)</h2>")
+    for key, g in done.groupby(group, sort=True):
         row = g.iloc[0].to_dict()
         b64 = trajectory_png(row, base)
-        head = html.escape(f"{scn} · {ctl} · seed {row['seed']}")
+        head = html.escape(f"{_label(key, group)} · seed {row['seed']}")
         parts.append(f"<h3>{head}</h3>"
-                     + (_img(b64, f"trajectory {scn} {ctl}") if b64 else "<p>(no trajectory recorded)</p>"))
+                     + (_img(b64, f"trajectory {_label(key, group)}") if b64 else "<p>(no trajectory recorded)</p>"))
     bp = box_plots(df)
     parts.append("<h2>Metric distributions across seeds</h2>" + (_img(bp, "box plots") if bp else "<p>no done runs</p>"))
     if len(done):
@@ -207,7 +246,7 @@ def build_html(df, base: pathlib.Path, title: str, run_key: str | None = None) -
         parts.append(f"<h2>Gap and speed over time: {html.escape(str(row['scenario']))} · "
                      f"{html.escape(str(row['controller']))} · seed {row['seed']} ({html.escape(str(row['key'])[:16])})</h2>"
                      + (_img(b64, "time series") if b64 else "<p>(no trajectory recorded)</p>"))
-    cols = ["key", "scenario", "controller", "seed", "status"] + [c for c in ("goal_reached", *METRICS) if c in df]
+    cols = ["key", *group, "seed", "status"] + [c for c in ("goal_reached", *METRICS) if c in df]
     shown = df.sort_values(["scenario", "controller", "seed", "key"]).assign(key=lambda x: x["key"].astype(str).str[:16])
     parts.append(f'<h2>Runs</h2><div id="runs">{_table_html(shown, cols)}</div>')
     parts.append("<h2>Failed runs</h2>" + (f'<div id="failed" class="failed">'
@@ -245,7 +284,7 @@ def cmd_report(args) -> int:
     if args.md:
         s = summary(df)
         failed = df[df["status"] != "done"]
-        text = "## Controller x scenario\n\n" + markdown(s, list(s.columns))
+        text = f"## {' x '.join(varied(df)[1])}\n\n" + markdown(s, list(s.columns))
         if len(failed):
             text += "\n## Failed runs\n\n" + markdown(failed, ["key", "scenario", "controller", "seed", "error"])
         args.md.write_text(text)

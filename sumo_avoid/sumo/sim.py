@@ -137,6 +137,10 @@ class SumoSim:
     def departed(self) -> tuple[str, ...]:
         return tuple(libsumo.simulation.getSubscriptionResults()[libsumo.constants.VAR_DEPARTED_VEHICLES_IDS])
 
+    def waiting(self) -> frozenset[str]:
+        """Vehicles whose depart time has come that SUMO could not insert yet."""
+        return frozenset(libsumo.simulation.getPendingVehicles())
+
     def pending(self) -> int:
         """Vehicles loaded but not yet in the network, plus those in it."""
         return libsumo.simulation.getMinExpectedNumber()
@@ -164,12 +168,16 @@ class SumoSim:
             prev(vid, v)
 
     def release(self, vid: str) -> None:
-        """Take a finished ego out of the simulation."""
+        """Take a finished ego out of the simulation. Its subscription goes first: libsumo keeps the
+        subscription of a vehicle removed by ``remove`` and the next step fails with "Vehicle 'x' is
+        not known" (found with two egos, one at its goal while the other drives on)."""
         if vid in self._egos:
             self._egos.discard(vid)
             self._static_key = None
         if vid in self._dims and vid in libsumo.vehicle.getIDList():
+            libsumo.vehicle.unsubscribe(vid)
             libsumo.vehicle.remove(vid)
+            self._dims.pop(vid)
 
     # --- stepping --------------------------------------------------------------------------
     def step(self) -> list[SumoCollision]:

@@ -91,3 +91,42 @@ def test_turn_gets_a_close_up_and_a_straight_run_does_not():
     pts = pd.DataFrame({"x": [90.0, 95.0, 10.0], "y": [90.0, 95.0, 90.0]})  # two in the upper right, one upper left
     order = _emptiest_corners(pts, 0.0, 100.0, 0.0, 100.0)
     assert order[:2] == ["lower left", "lower right"] and order[-1] == "upper right"
+
+
+@pytest.mark.sumo
+def test_a_vehicle_that_leaves_and_reenters_the_recording_is_drawn_in_pieces(tmp_path):
+    """Real SUMO on the overtaking road: two egos stand 700 m apart, 'v' drives past both at 25 m/s;
+    with a 40 m recording radius it is recorded near a, then not, then near b. Its drawn line breaks
+    there: no segment of it jumps across the unrecorded 600 m (it did: a straight line across)."""
+    from sumo_avoid.plots.trajectories import _draw, _new_figure, track_xy
+    from sumo_avoid.rollout import runner
+    from sumo_avoid.scenario import spec as scenario
+
+    (tmp_path / "r.rou.xml").write_text("""<routes>
+  <vType id="car" length="4.5" width="1.8" sigma="0" maxSpeed="30"/>
+  <route id="road" edges="road"/>
+  <vehicle id="a" type="car" route="road" depart="0" departLane="0" departPos="200" departSpeed="0"/>
+  <vehicle id="b" type="car" route="road" depart="0" departLane="0" departPos="900" departSpeed="0"/>
+  <vehicle id="v" type="car" route="road" depart="0" departLane="2" departPos="10" departSpeed="25"/>
+</routes>""")
+    path = tmp_path / "s.toml"
+    path.write_text(f'name = "pieces"\n[sim]\nnet = "{NETS / "overtaking.net.xml"}"\nroutes = ["r.rou.xml"]\n'
+                    'duration_s = 40.0\n[ego]\nids = ["a", "b"]\ncontroller = "scripted"\n'
+                    '[controllers.scripted]\nspeed_mps = 0.0\n[output]\nrecord_radius_m = 40.0\n')
+    res = runner.run(scenario.load(path))
+    v = res.traj[res.traj["id"] == "v"].sort_values("step")
+    assert np.diff(v["step"].to_numpy()).max() > 100  # the gap: more than 10 s unrecorded
+    x, _ = track_xy(v)
+    assert np.isnan(x).sum() == 1 and len(x) == len(v) + 1
+    fig = _new_figure((8, 3))
+    ax = fig.add_subplot(1, 1, 1)
+    traj = res.traj.sort_values(["id", "step"])
+    groups = {k: g for k, g in traj.groupby("id")}
+    _draw(ax, Road.from_net_file(NETS / "overtaking.net.xml"), groups, ["a", "b"], ["v"], [], {}, [])
+    line, = [ln for ln in ax.lines if ln.get_gid() == "track:v"]
+    xs = np.asarray(line.get_xdata(), float)
+    steps = np.diff(xs)
+    assert np.nanmax(np.abs(steps)) < 5.0  # 25 m/s x 0.1 s per step, never across the gap
+    assert xs[np.isfinite(xs)].max() - xs[np.isfinite(xs)].min() > 600  # both pieces are drawn
+    plot_trajectories(Road.from_net_file(NETS / "overtaking.net.xml"), res.traj, tmp_path / "t.png")
+    assert (tmp_path / "t.png").stat().st_size > 10_000

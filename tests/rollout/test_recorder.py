@@ -12,3 +12,16 @@ def test_recorder_keeps_egos_and_vehicles_within_the_radius():
     rec = Recorder(300.0)
     rec.record(0, s)
     assert list(rec.table()["id"]) == ["ego", "near"]
+
+
+def test_recorded_headings_are_wrapped_to_minus_pi_exclusive_pi_inclusive():
+    """SUMO's compass angle 270 deg (west) becomes the math heading -pi, and an integrated heading
+    may pass any multiple of 2 pi: trajectories.csv holds (-pi, pi]."""
+    raw = np.array([-np.pi, np.pi, -1.5 * np.pi, 2.5 * np.pi, 7.0, -0.1, 0.0])
+    s = Snapshot(0.0, tuple(f"v{i}" for i in range(len(raw))), np.zeros((len(raw), 2)), np.zeros((len(raw), 2)), raw,
+                 np.full(len(raw), 4.5), np.full(len(raw), 1.8), [True] * len(raw))
+    rec = Recorder(0.0)
+    rec.record(0, s)
+    h = rec.table()["heading"].to_numpy()
+    np.testing.assert_allclose(h, [np.pi, np.pi, 0.5 * np.pi, 0.5 * np.pi, 7.0 - 2 * np.pi, -0.1, 0.0], atol=1e-12)
+    assert (h > -np.pi).all() and (h <= np.pi).all()

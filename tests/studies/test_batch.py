@@ -326,3 +326,20 @@ def test_progress_is_quiet_in_ci_or_without_a_terminal(monkeypatch):
     bar.update(False)
     assert (bar.done, bar.failed, bar.bar.n) == (1, 1, 2)
     bar.close()
+
+
+def test_an_ego_that_never_departs_is_a_failed_run_with_its_cause(tmp_path):
+    """The same error as `sumo-avoid run` (exit 2 there): recorded failed with the one line, and the
+    batch goes on with the good run."""
+    (tmp_path / "r.rou.xml").write_text('<routes>\n  <trip id="ego" from="road" to="road" depart="0"/>\n'
+                                        '  <trip id="late" from="road" to="road" depart="60"/>\n</routes>\n')
+    scn = tmp_path / "late.toml"
+    scn.write_text(f'name = "late"\n[sim]\nnet = "{ROOT / "nets" / "overtaking.net.xml"}"\nroutes = ["r.rou.xml"]\n'
+                   'duration_s = 3.0\n[ego]\nids = ["ego", "late"]\n[output]\nplots = false\n')
+    specs = batch.expand([scn], [1], grid={"ego.ids": [["ego", "late"], ["ego"]]})
+    cfg = batch.BatchConfig(tuple(specs), tmp_path / "ledger.sqlite", workers=1)
+    assert batch.run_batch(cfg, progress=False) == {"total": 2, "skipped": 0, "done": 1, "failed": 1}
+    df = ledger.read(tmp_path / "ledger.sqlite")
+    error, = df.loc[df["status"] == "failed", "error"]
+    assert error == (f"ScenarioError: {scn}: key 'ego.ids[1]': expected egos that depart within the run: 'late' "
+                     "never departed by t=3.0 s (its depart time is later, or SUMO dropped it)")

@@ -1,6 +1,7 @@
 """The HTML report: self-contained (images embedded) and its tables match the ledger."""
 import base64
 import html.parser
+import json
 import pathlib
 
 import pandas as pd
@@ -116,3 +117,28 @@ def test_report_of_run_folders_and_bad_source(study, tmp_path, capsys):
     assert len(_frame(page.tables["runs"])) == 4 and all(s.startswith("data:") for s in page.imgs)
     assert main(["report", str(tmp_path / "nothing"), "--out", str(out)]) == 2
     assert capsys.readouterr().err.count("\n") == 1
+
+
+def test_report_groups_by_every_dimension_the_batch_varied(tmp_path):
+    """A batch over a grid (ego.sensor) and a --set that is the same for every run: the report has a
+    row, a box and a trajectory per scenario x controller x sensor (not one row mixing the sensors),
+    an ego.sensor column, and nothing for the constant --set."""
+    specs = batch.expand([OVERTAKING], [1], SHORT, ["apf_sa"], grid={"ego.sensor": ["truth", "radar"]})
+    cfg = batch.BatchConfig(tuple(specs), tmp_path / "ledger.sqlite", workers=2)
+    assert batch.run_batch(cfg, progress=False)["done"] == 2
+    out = tmp_path / "r.html"
+    assert main(["report", str(tmp_path / "ledger.sqlite"), "--out", str(out), "--md", str(tmp_path / "s.md")]) == 0
+    page = _Page()
+    page.feed(out.read_text())
+    summ = _frame(page.tables["summary"])
+    assert list(summ.columns[:3]) == ["scenario", "controller", "ego.sensor"]
+    assert summ["ego.sensor"].tolist() == ["radar", "truth"] and summ["runs"].tolist() == ["1", "1"]
+    assert "sim.duration_s" not in summ.columns and "output.plots" not in summ.columns
+    df = ledger.read(tmp_path / "ledger.sqlite")
+    for r in df.to_dict(orient="records"):
+        sensor = "radar" if 'ego.sensor="radar"' in json.loads(r["overrides"]) else "truth"
+        row = summ[summ["ego.sensor"] == sensor].iloc[0]
+        assert _close(row["min_gap_m_min"], r["min_gap_m"]) and _close(row["mean_speed_mps_mean"], r["mean_speed_mps"])
+    assert "ego.sensor" in _frame(page.tables["runs"]).columns
+    assert len(page.imgs) == 2 + 1 + 1  # a trajectory per sensor, box plots, time series
+    assert "| overtaking | apf_sa | radar | 1 | 1 | 0 |" in (tmp_path / "s.md").read_text()

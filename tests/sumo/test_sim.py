@@ -52,3 +52,16 @@ def test_ego_is_placed_exactly_and_off_lane():
         assert snap.pos[i] == pytest.approx([40.0, -5.75], abs=1e-6)
         assert snap.heading[i] == pytest.approx(h, abs=1e-9)
         assert snap.is_ego[i]
+
+
+def test_an_ego_released_at_its_goal_is_gone_and_the_others_step_on():
+    """libsumo keeps the subscription of a removed vehicle: without dropping it first, the next step
+    failed with "Vehicle 'parked' is not known" (two egos, one done before the other)."""
+    with _start() as sim:
+        sim.step()
+        sim.take_over("ego")
+        sim.take_over("parked")
+        sim.release("parked")
+        for _ in range(3):
+            sim.step()
+        assert sim.read().ids == ("ego",)
