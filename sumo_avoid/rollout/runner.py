@@ -5,6 +5,8 @@ from its recording afterwards (:mod:`sumo_avoid.metrics`) and never feed back in
 """
 from __future__ import annotations
 
+import pathlib
+import tempfile
 import time
 
 from tqdm import tqdm
@@ -18,6 +20,7 @@ from sumo_avoid.rollout.recorder import Recorder
 from sumo_avoid.rollout.result import RunResult, Scene
 from sumo_avoid.sumo.road import Road
 from sumo_avoid.sumo.sim import SumoSim, sumo_args
+from sumo_avoid.sumo.ssm import SsmParams, SsmRequest, read_conflicts
 
 
 class Progress:
@@ -48,18 +51,25 @@ def run(scn, *, log_file=None, progress: bool = False) -> RunResult:
     egos = EgoBook(set(spec.ego.ids) | set(arena.ids if arena else ()), road, goal=spec.ego.goal,
                    goal_tolerance_m=spec.ego.goal_tolerance_m, cruise_speed_mps=spec.ego.cruise_speed_mps,
                    uses_goals=type(controller).needs.goals)
-    args = sumo_args(scn.net_file, scn.route_files, scn.additional_files, spec.sim.step_s, spec.sim.seed,
-                     spec.sim.lateral_resolution_m, log_file, sumo_collisions=spec.sim.sumo_collisions and arena is None)
-    t_loop = time.perf_counter()
-    with SumoSim(args) as sim:
-        stack = assemble(scn, Context(spec.sim.seed, sim.step_s, road, walls, obstacles), controller)
-        for hook in hooks:
-            hook.setup(sim)
-        steps = rollout(sim, stack, egos, recorder, int(round(spec.sim.duration_s / sim.step_s)),
-                        [Progress(spec.sim.duration_s)] if progress else [])
-        sim_time = sim.time_s
-    t_end = time.perf_counter()
+    ssm = SsmParams() if arena is None and spec.ego.ids else None  # lanes to measure on: not in an arena
+    with tempfile.TemporaryDirectory(prefix="sumo-avoid-run-") as tmp:  # SUMO's SSM file; gone afterwards
+        ssm_file = pathlib.Path(tmp) / "ssm.xml"
+        args = sumo_args(scn.net_file, scn.route_files, scn.additional_files, spec.sim.step_s, spec.sim.seed,
+                         spec.sim.lateral_resolution_m, log_file, sumo_collisions=spec.sim.sumo_collisions and arena is None,
+                         ssm=SsmRequest(tuple(spec.ego.ids), ssm_file, ssm) if ssm else None)
+        t_loop = time.perf_counter()
+        with SumoSim(args) as sim:
+            stack = assemble(scn, Context(spec.sim.seed, sim.step_s, road, walls, obstacles), controller)
+            for hook in hooks:
+                hook.setup(sim)
+            steps = rollout(sim, stack, egos, recorder, int(round(spec.sim.duration_s / sim.step_s)),
+                            [Progress(spec.sim.duration_s)] if progress else [])
+            sim_time = sim.time_s
+        t_end = time.perf_counter()
+        tables = dict(stack.tables())
+        if ssm:  # the file is complete once SUMO has closed
+            tables["ssm_conflicts"] = read_conflicts(ssm_file)
     return RunResult(scn, Scene(road, walls, obstacles), recorder.table(), recorder.sumo_events(), egos.goals,
                      steps, sim_time, stack.stats(),
                      {"setup_s": t_loop - t_start, "loop_s": t_end - t_loop, "total_s": t_end - t_start},
-                     stack.tables(), egos.tasks, recorder.signals())
+                     tables, egos.tasks, recorder.signals(), ssm=ssm)
