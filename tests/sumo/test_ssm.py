@@ -14,6 +14,7 @@ from sumo_avoid.outputs import run_metrics
 from sumo_avoid.rollout import runner
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.studies import ledger
+from sumo_avoid.studies.suite import Criterion
 from sumo_avoid.sumo.sim import SumoSim, SumoStartError, sumo_args
 from sumo_avoid.sumo.ssm import COLUMNS, SsmParams, SsmRequest, read_conflicts, ssm_args
 
@@ -125,6 +126,9 @@ def test_ssm_sees_an_ego_closing_on_a_slower_leader(tmp_path):
     for k in ("min_ttc_s", "max_drac_mps2", "min_pet_s", "ssm_conflicts", "min_ttc2d_s", "wrong_way_m",
               "off_road_m", "max_abs_jerk_mps3", "max_lat_accel_mps2"):
         assert k in cols and cols[k] is not None
+    rows = [{"seed": 1, **cols}]
+    assert Criterion.parse("min_ttc_s >= 2").check(rows)[0] and not Criterion.parse("min_ttc_s >= 3").check(rows)[0]
+    assert Criterion.parse("wrong_way_m == 0").check(rows)[0] and Criterion.parse("off_road_m_max <= 0").check(rows)[0]
 
 
 def test_a_collision_is_ttc_zero_repeats_and_leaves_no_file(tmp_path, monkeypatch):
