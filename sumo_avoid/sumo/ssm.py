@@ -1,13 +1,21 @@
 """SUMO's surrogate-safety-measure (SSM) device on the egos: its command-line options and its XML
 output read back into one table per run (SUMO docs: Simulation/Output/SSM_Device).
 
-Only the egos carry the device (``--device.ssm.explicit``); it measures TTC, DRAC and PET against
+Only the egos carry the device; it measures TTC, DRAC and PET against
 every vehicle within ``range_m`` and logs an encounter as a *conflict* (one ``<conflict>`` element)
 when one of its measures crosses its threshold (TTC or PET below, DRAC above). With
 ``--device.ssm.trajectories false`` each conflict carries only the extremes: ``minTTC``,
 ``maxDRAC`` and ``PET``, each with time, conflict point, encounter type code and value ("NA" when
 SUMO could not compute it, e.g. PET for a car-following encounter). SUMO writes the file as
 encounters end and completes it when the simulation closes. Nothing here imports libsumo.
+
+How the egos are equipped: not with ``--device.ssm.explicit``. SUMO reads that list once per
+process (``MSDevice::myExplicitIDs`` is static and never cleared): in a process that runs several
+simulations through libsumo (tests, benchmarks, ``reproduce``), every later run kept the first
+run's list (measured: after a run with egos flock0..9, a run with ego "ego" logged no conflict).
+Instead each ego's definition gets the per-vehicle parameter ``has.ssm.device = true``: the route
+and additional files that define an ego are copied, so changed, into the run's temporary folder
+(:func:`equip`), the others are passed as they are.
 
 Because only conflicts are logged, a run's extremes are exact only up to the thresholds:
 min(threshold, smallest logged minTTC) equals min(threshold, true minimum TTC) (every encounter
@@ -42,20 +50,49 @@ class SsmParams:
 
 @dataclass(frozen=True)
 class SsmRequest:
-    """Equip these egos, write to ``file`` (in the run's temporary folder)."""
+    """Equip these egos, write to ``file`` (in the run's temporary folder, where :func:`equip` also
+    writes its copies)."""
 
     ego_ids: tuple[str, ...]
     file: pathlib.Path
     params: SsmParams = SsmParams()
 
 
+EQUIP = ("has.ssm.device", "true")  # the per-vehicle parameter that gives a vehicle the device
+EGO_TAGS = ("vehicle", "trip")  # elements defining one named vehicle (a flow's ids are generated)
+
+
+def equip(files, req: SsmRequest, prefix: str = "") -> list[pathlib.Path]:
+    """The files with every ego's definition carrying :data:`EQUIP`: a file defining an ego is
+    copied into ``req.file``'s folder (named ``PREFIXk_NAME``) with a ``<param>`` added to the ego's
+    element, the others are returned as they are, as is a file that is no readable XML (SUMO then
+    reports it). Relative paths inside a copied file would resolve from the temporary folder."""
+    out = []
+    for k, f in enumerate(files):
+        f = pathlib.Path(f)
+        try:
+            tree = ET.parse(f)
+        except (ET.ParseError, OSError):
+            out.append(f)
+            continue
+        egos = [e for e in tree.getroot().iter() if e.tag in EGO_TAGS and e.get("id") in req.ego_ids]
+        if not egos:
+            out.append(f)
+            continue
+        for e in egos:
+            ET.SubElement(e, "param", key=EQUIP[0], value=EQUIP[1])
+        dst = req.file.parent / f"{prefix}{k}_{f.name}"
+        tree.write(dst, encoding="UTF-8", xml_declaration=True)
+        out.append(dst)
+    return out
+
+
 def ssm_args(req: SsmRequest) -> list[str]:
-    """SUMO options equipping the egos (and no other vehicle) with the SSM device."""
+    """SUMO options for the SSM device of the vehicles :func:`equip` gave one (no other vehicle)."""
     if not req.ego_ids:
         return []
     p = req.params
-    return ["--device.ssm.explicit", ",".join(sorted(req.ego_ids)),
-            "--device.ssm.measures", "TTC DRAC PET",
+    return ["--device.ssm.measures", "TTC DRAC PET",
             "--device.ssm.thresholds", f"{p.ttc_threshold_s!r} {p.drac_threshold_mps2!r} {p.pet_threshold_s!r}",
             "--device.ssm.range", repr(p.range_m), "--device.ssm.extratime", repr(p.extratime_s),
             "--device.ssm.trajectories", "false", "--device.ssm.file", str(req.file)]

@@ -4,6 +4,7 @@ import json
 import math
 import tempfile
 import textwrap
+import xml.etree.ElementTree as ET
 
 import pandas as pd
 import pytest
@@ -16,7 +17,7 @@ from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.studies import ledger
 from sumo_avoid.studies.suite import Criterion
 from sumo_avoid.sumo.sim import SumoSim, SumoStartError, sumo_args
-from sumo_avoid.sumo.ssm import COLUMNS, SsmParams, SsmRequest, read_conflicts, ssm_args
+from sumo_avoid.sumo.ssm import COLUMNS, SsmParams, SsmRequest, equip, read_conflicts, ssm_args
 
 XML = """<?xml version="1.0" encoding="UTF-8"?>
 <SSMLog>
@@ -34,17 +35,35 @@ XML = """<?xml version="1.0" encoding="UTF-8"?>
 """
 
 
-def test_options_equip_the_egos_only_and_name_the_file(tmp_path):
-    f = tmp_path / "ssm.xml"
+def test_options_and_equipped_copies_of_the_files_defining_egos(tmp_path):
+    f = tmp_path / "run" / "ssm.xml"
+    f.parent.mkdir()
     args = ssm_args(SsmRequest(("b", "a"), f))
     opt = dict(zip(args[::2], args[1::2]))
-    assert opt["--device.ssm.explicit"] == "a,b"
     assert opt["--device.ssm.measures"] == "TTC DRAC PET"
     assert opt["--device.ssm.thresholds"] == "5.0 1.0 3.0"
     assert opt["--device.ssm.file"] == str(f) and opt["--device.ssm.trajectories"] == "false"
-    assert "--device.ssm.probability" not in opt  # nobody else gets one
+    assert "--device.ssm.probability" not in opt and "--device.ssm.explicit" not in opt  # see equip()
     assert ssm_args(SsmRequest((), f)) == []
-    assert not f.exists()  # building a command line writes nothing
+    assert not f.exists()  # building a command line writes no output
+    (tmp_path / "egos.rou.xml").write_text(
+        '<routes><vType id="car"/><route id="r" edges="road"/>'
+        '<vehicle id="ego" type="car" route="r" depart="0"><stop lane="road_1" endPos="80" duration="5"/></vehicle>'
+        '<vehicle id="other" type="car" route="r" depart="1"/><trip id="b" from="road" to="road" depart="2"/>'
+        '</routes>')
+    (tmp_path / "others.rou.xml").write_text('<routes><vehicle id="x" route="r" depart="0"/></routes>')
+    (tmp_path / "broken.rou.xml").write_text("<routes><vehicle")
+    files = [tmp_path / n for n in ("others.rou.xml", "egos.rou.xml", "broken.rou.xml")]
+    req = SsmRequest(("ego", "b"), f)
+    out = equip(files, req, "r")
+    assert out[0] == files[0] and out[2] == files[2]  # nothing to equip / SUMO reports the XML error
+    assert out[1] == f.parent / "r1_egos.rou.xml"
+    root = ET.parse(out[1]).getroot()
+    params = {e.get("id"): [(p.get("key"), p.get("value")) for p in e.findall("param")] for e in root
+              if e.tag in ("vehicle", "trip")}
+    assert params == {"ego": [("has.ssm.device", "true")], "other": [], "b": [("has.ssm.device", "true")]}
+    assert [c.tag for c in root.find("vehicle")] == ["stop", "param"]  # the rest as it was
+    assert [p.name for p in f.parent.iterdir()] == ["r1_egos.rou.xml"]
 
 
 def test_conflicts_read_back_sorted_with_na_as_missing(tmp_path):
@@ -78,14 +97,14 @@ def test_sumo_refusing_bad_input_leaves_no_ssm_file(tmp_path):
     assert not f.exists()
 
 
-def _closing(tmp_path, duration_s: float):
+def _closing(tmp_path, duration_s: float, ego: str = "ego"):
     """The scripted ego at 15 m/s, blind, behind a leader at 5 m/s in its lane (fronts at 20 and 100 m)."""
-    (tmp_path / "closing.rou.xml").write_text(textwrap.dedent("""\
+    (tmp_path / "closing.rou.xml").write_text(textwrap.dedent(f"""\
         <routes>
             <vType id="car" vClass="passenger" length="4.5" width="1.8" sigma="0"/>
             <vType id="slow" vClass="passenger" length="4.5" width="1.8" sigma="0" maxSpeed="5"/>
             <route id="straight" edges="road"/>
-            <vehicle id="ego" type="car" route="straight" depart="0" departLane="1" departPos="20" departSpeed="15"/>
+            <vehicle id="{ego}" type="car" route="straight" depart="0" departLane="1" departPos="20" departSpeed="15"/>
             <vehicle id="leader" type="slow" route="straight" depart="0" departLane="1" departPos="100" departSpeed="5"/>
         </routes>
         """))
@@ -96,7 +115,7 @@ def _closing(tmp_path, duration_s: float):
         routes = ["closing.rou.xml"]
         duration_s = {duration_s}
         [ego]
-        ids = ["ego"]
+        ids = ["{ego}"]
         controller = "scripted"
         goal = [1400.0, -8.75]
         rules = "none"
@@ -129,6 +148,15 @@ def test_ssm_sees_an_ego_closing_on_a_slower_leader(tmp_path):
     rows = [{"seed": 1, **cols}]
     assert Criterion.parse("min_ttc_s >= 2").check(rows)[0] and not Criterion.parse("min_ttc_s >= 3").check(rows)[0]
     assert Criterion.parse("wrong_way_m == 0").check(rows)[0] and Criterion.parse("off_road_m_max <= 0").check(rows)[0]
+
+
+def test_every_run_in_one_process_equips_its_own_egos(tmp_path):
+    # with --device.ssm.explicit SUMO kept the first list of the process (here "ego", from the
+    # tests above, or "car_a"): "car_b" would carry no device and log nothing
+    for name in ("car_a", "car_b"):
+        (tmp_path / name).mkdir()
+        res, m = _closing(tmp_path / name, 5.0, ego=name)
+        assert set(res.tables["ssm_conflicts"]["ego"]) == {name} and m["min_ttc_s"] < 3.0
 
 
 def test_a_collision_is_ttc_zero_repeats_and_leaves_no_file(tmp_path, monkeypatch):
