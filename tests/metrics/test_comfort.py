@@ -10,9 +10,9 @@ from sumo_avoid.metrics.comfort import comfort
 
 
 def ego_rows(vid, t, x, y, heading, speed, ego=True):
-    return [dict(step=k, time_s=float(t[k]), id=vid, is_ego=ego, x=float(x[k]), y=float(y[k]),
-                 vx=float(speed[k] * math.cos(heading[k])), vy=float(speed[k] * math.sin(heading[k])),
-                 speed=float(speed[k]), heading=float(heading[k]), length=4.0, width=2.0) for k in range(len(t))]
+    return [{"step": k, "time_s": float(t[k]), "id": vid, "is_ego": ego, "x": float(x[k]), "y": float(y[k]),
+                 "vx": float(speed[k] * math.cos(heading[k])), "vy": float(speed[k] * math.sin(heading[k])),
+                 "speed": float(speed[k]), "heading": float(heading[k]), "length": 4.0, "width": 2.0} for k in range(len(t))]
 
 
 def straight(vid, dt, s, ego=True):

@@ -17,8 +17,8 @@ from sumo_avoid.sumo.road import Road
 
 
 def path(vid, xs, ys, heading, ego=True):
-    return [dict(step=k, time_s=0.1 * k, id=vid, is_ego=ego, x=float(x), y=float(y), vx=0.0, vy=0.0, speed=0.0,
-                 heading=heading, length=4.0, width=2.0) for k, (x, y) in enumerate(zip(xs, ys))]
+    return [{"step": k, "time_s": 0.1 * k, "id": vid, "is_ego": ego, "x": float(x), "y": float(y), "vx": 0.0, "vy": 0.0, "speed": 0.0,
+                 "heading": heading, "length": 4.0, "width": 2.0} for k, (x, y) in enumerate(zip(xs, ys))]
 
 
 def result(rows, net="left_turn"):

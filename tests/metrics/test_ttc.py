@@ -66,8 +66,8 @@ def test_overlapping_now_is_zero_and_apart_or_late_is_inf():
 
 
 def row(step, vid, ego, x, y, heading, vx, vy, length=4.0, width=2.0):
-    return dict(step=step, time_s=0.1 * step, id=vid, is_ego=ego, x=x, y=y, vx=vx, vy=vy, speed=math.hypot(vx, vy),
-                heading=heading, length=length, width=width)
+    return {"step": step, "time_s": 0.1 * step, "id": vid, "is_ego": ego, "x": x, "y": y, "vx": vx, "vy": vy, "speed": math.hypot(vx, vy),
+                "heading": heading, "length": length, "width": width}
 
 
 def test_min_over_the_run_clamped_at_the_horizon():

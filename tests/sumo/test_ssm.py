@@ -17,7 +17,14 @@ from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.studies import ledger
 from sumo_avoid.studies.suite import Criterion
 from sumo_avoid.sumo.sim import SumoSim, SumoStartError, sumo_args
-from sumo_avoid.sumo.ssm import COLUMNS, SsmParams, SsmRequest, equip, read_conflicts, ssm_args
+from sumo_avoid.sumo.ssm import (
+    COLUMNS,
+    SsmParams,
+    SsmRequest,
+    equip,
+    read_conflicts,
+    ssm_args,
+)
 
 XML = """<?xml version="1.0" encoding="UTF-8"?>
 <SSMLog>
