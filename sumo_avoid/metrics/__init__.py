@@ -2,8 +2,11 @@
 controller's own). Each is a :class:`~sumo_avoid.metrics.base.Metric`; later ones win on a shared key."""
 from sumo_avoid.core.registry import Registry
 from sumo_avoid.metrics.base import clean
+from sumo_avoid.metrics.comfort import Comfort
 from sumo_avoid.metrics.flocking import FlockingOrder
+from sumo_avoid.metrics.road_use import RoadUse
 from sumo_avoid.metrics.rules import RuleViolations
+from sumo_avoid.metrics.ssm import SurrogateSafety
 from sumo_avoid.metrics.standard import (
     Collisions,
     MinGap,
@@ -13,6 +16,7 @@ from sumo_avoid.metrics.standard import (
     PluginStats,
     RunInfo,
 )
+from sumo_avoid.metrics.ttc import MinTTC2D
 
 METRICS = Registry("metric")
 METRICS.register("run", RunInfo)
@@ -24,8 +28,14 @@ METRICS.register("plugin_stats", PluginStats)
 METRICS.register("motion", Motion)
 METRICS.register("flocking", FlockingOrder)
 METRICS.register("rules", RuleViolations)
+METRICS.register("road_use", RoadUse)
+METRICS.register("comfort", Comfort)
+METRICS.register("ssm", SurrogateSafety)
+METRICS.register("ttc2d", MinTTC2D)
 
-STANDARD = ("run", "collisions", "min_gap", "phi_coll", "phi_wall", "plugin_stats", "motion", "rules")
+# ttc2d last: its pair search is the widest, and the shared search keeps the widest one
+STANDARD = ("run", "collisions", "min_gap", "phi_coll", "phi_wall", "plugin_stats", "motion", "rules",
+            "road_use", "comfort", "ssm", "ttc2d")
 
 
 def compute(run, names=STANDARD) -> dict:

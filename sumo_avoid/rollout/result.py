@@ -31,6 +31,7 @@ class RunResult:
     tables: dict = field(default_factory=dict)  # name -> DataFrame, written as NAME.csv (e.g. detections)
     tasks: dict = field(default_factory=dict)  # ego id -> EgoTask (route path, junction links, speed limits)
     signals: pd.DataFrame | None = None  # traffic light states: time_s, tls, state (a row per change)
+    ssm: Any = None  # sumo_avoid.sumo.ssm.SsmParams SUMO's SSM device ran with (conflicts in tables), None: off
     _memo: dict = field(default_factory=dict, compare=False, repr=False)
 
     @property

@@ -5,6 +5,8 @@ from its recording afterwards (:mod:`sumo_avoid.metrics`) and never feed back in
 """
 from __future__ import annotations
 
+import pathlib
+import tempfile
 import time
 
 from tqdm import tqdm
@@ -20,6 +22,7 @@ from sumo_avoid.rollout.result import RunResult, Scene
 from sumo_avoid.scenario.spec import sumo_load_error
 from sumo_avoid.sumo.road import Road
 from sumo_avoid.sumo.sim import SumoSim, SumoStartError, sumo_args
+from sumo_avoid.sumo.ssm import SsmParams, SsmRequest, read_conflicts
 
 
 class Progress:
@@ -66,27 +69,34 @@ def run(scn, *, log_file=None, progress: bool = False) -> RunResult:
     egos = EgoBook(set(spec.ego.ids) | set(arena.ids if arena else ()), road, goal=spec.ego.goal, goals=spec.ego.goals,
                    goal_tolerance_m=spec.ego.goal_tolerance_m, cruise_speed_mps=spec.ego.cruise_speed_mps,
                    uses_goals=type(controller).needs.goals)
-    args = sumo_args(scn.net_file, scn.route_files, scn.additional_files, spec.sim.step_s, spec.sim.seed,
-                     spec.sim.lateral_resolution_m, log_file, sumo_collisions=spec.sim.sumo_collisions and arena is None)
-    t_loop = time.perf_counter()
-    try:
-        sim = SumoSim(args)
-    except SumoStartError as e:
-        raise sumo_load_error(scn, str(e)) from None
-    with sim:
-        stack = assemble(scn, Context(spec.sim.seed, sim.step_s, road, walls, obstacles), controller)
-        for hook in hooks:
-            hook.setup(sim)
+    ssm = SsmParams() if arena is None and spec.ego.ids else None  # lanes to measure on: not in an arena
+    with tempfile.TemporaryDirectory(prefix="sumo-avoid-run-") as tmp:  # SUMO's SSM file; gone afterwards
+        ssm_file = pathlib.Path(tmp) / "ssm.xml"
+        args = sumo_args(scn.net_file, scn.route_files, scn.additional_files, spec.sim.step_s, spec.sim.seed,
+                         spec.sim.lateral_resolution_m, log_file, sumo_collisions=spec.sim.sumo_collisions and arena is None,
+                         ssm=SsmRequest(tuple(spec.ego.ids), ssm_file, ssm) if ssm else None)
+        t_loop = time.perf_counter()
         try:
-            steps = rollout(sim, stack, egos, recorder, int(round(spec.sim.duration_s / sim.step_s)),
-                            [Progress(spec.sim.duration_s)] if progress else [])
-        except FieldError as e:  # a goal edge not on the route SUMO gave the ego
-            raise ScenarioError(str(scn.path), e.key, e.expected, e.got, show_got=e.show_got) from None
-        sim_time = sim.time_s
-        if egos.never_departed():
-            raise never_departed_error(scn, egos.never_departed(), sim_time, sim.waiting())
-    t_end = time.perf_counter()
+            sim = SumoSim(args)
+        except SumoStartError as e:
+            raise sumo_load_error(scn, str(e)) from None
+        with sim:
+            stack = assemble(scn, Context(spec.sim.seed, sim.step_s, road, walls, obstacles), controller)
+            for hook in hooks:
+                hook.setup(sim)
+            try:
+                steps = rollout(sim, stack, egos, recorder, int(round(spec.sim.duration_s / sim.step_s)),
+                                [Progress(spec.sim.duration_s)] if progress else [])
+            except FieldError as e:  # a goal edge not on the route SUMO gave the ego
+                raise ScenarioError(str(scn.path), e.key, e.expected, e.got, show_got=e.show_got) from None
+            sim_time = sim.time_s
+            if egos.never_departed():
+                raise never_departed_error(scn, egos.never_departed(), sim_time, sim.waiting())
+        t_end = time.perf_counter()
+        tables = dict(stack.tables())
+        if ssm:  # the file is complete once SUMO has closed
+            tables["ssm_conflicts"] = read_conflicts(ssm_file)
     return RunResult(scn, Scene(road, walls, obstacles), recorder.table(), recorder.sumo_events(), egos.goals,
                      steps, sim_time, stack.stats(),
                      {"setup_s": t_loop - t_start, "loop_s": t_end - t_loop, "total_s": t_end - t_start},
-                     stack.tables(), egos.tasks, recorder.signals())
+                     tables, egos.tasks, recorder.signals(), ssm=ssm)

@@ -33,7 +33,8 @@ from sumo_avoid.studies import ledger
 from sumo_avoid.sumo.road import Road
 
 METRICS = ("collisions", "min_gap_m", "phi_coll", "phi_wall", "mean_speed_mps", "time_to_goal_s",
-           "path_length_m", "sumo_collisions")
+           "path_length_m", "sumo_collisions", "min_ttc_s", "min_ttc2d_s", "max_drac_mps2", "min_pet_s",
+           "wrong_way_m", "off_road_m", "max_abs_jerk_mps3", "max_lat_accel_mps2")
 
 
 def load_runs(src) -> tuple:
@@ -108,7 +109,9 @@ def summary(df):
         rows.append({**dict(zip(group, key)), "runs": len(g), "done": len(d), "failed": len(g) - len(d),
                      "goal_reached_rate": agg("goal_reached", "mean"), "collisions_total": agg("collisions", "sum"),
                      "min_gap_m_min": agg("min_gap_m", "min"), "phi_wall_max": agg("phi_wall", "max"),
-                     "phi_coll_mean": agg("phi_coll", "mean"), "mean_speed_mps_mean": agg("mean_speed_mps", "mean")})
+                     "phi_coll_mean": agg("phi_coll", "mean"), "mean_speed_mps_mean": agg("mean_speed_mps", "mean"),
+                     "min_ttc_s_min": agg("min_ttc_s", "min"), "min_ttc2d_s_min": agg("min_ttc2d_s", "min"),
+                     "wrong_way_m_max": agg("wrong_way_m", "max"), "off_road_m_max": agg("off_road_m", "max")})
     return pd.DataFrame(rows)
 
 

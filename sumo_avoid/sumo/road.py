@@ -31,6 +31,7 @@ from sumo_avoid.core.polyline import (
     polyline_project,
 )
 from sumo_avoid.core.types import LanePiece, RouteLink
+from sumo_avoid.sumo.lanes import LaneIndex
 
 
 class RoutePlan(NamedTuple):
@@ -357,6 +358,12 @@ class Road:
 
     def __repr__(self) -> str:
         return f"Road({os.path.basename(self.source)!r}, area={self.area.area:.0f} m2, bounds={self.bounds})"
+
+    # ------------------------------------------------------------------ lane lookup (metrics)
+    @functools.cached_property
+    def lanes(self) -> LaneIndex:
+        """The normal lanes and junctions for point queries (:class:`LaneIndex`), built on first use."""
+        return LaneIndex(self._net)
 
 
 @functools.lru_cache(maxsize=16)

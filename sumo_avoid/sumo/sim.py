@@ -20,6 +20,7 @@ import libsumo
 import numpy as np
 
 from sumo_avoid.core.snapshot import Snapshot
+from sumo_avoid.sumo.ssm import SsmRequest, equip, ssm_args
 
 _DYNAMIC = (libsumo.constants.VAR_POSITION, libsumo.constants.VAR_ANGLE, libsumo.constants.VAR_SPEED)
 _SIM_VARS = (libsumo.constants.VAR_DEPARTED_VEHICLES_IDS, libsumo.constants.VAR_ARRIVED_VEHICLES_IDS)
@@ -46,10 +47,14 @@ class EgoInfo:
 
 
 def sumo_args(net: pathlib.Path, routes, additional, step_s: float, seed: int, lateral_resolution_m: float,
-              log_file: pathlib.Path | None, sumo_collisions: bool = True) -> list[str]:
+              log_file: pathlib.Path | None, sumo_collisions: bool = True, ssm: SsmRequest | None = None) -> list[str]:
     """SUMO's command line. ``sumo_collisions=False`` turns SUMO's own (lane-based) collision check
     off: for a flock moved off-lane anywhere in an arena it reports tens of thousands of spurious
-    contacts per run (measured); the plug-in's footprint check is the reference there."""
+    contacts per run (measured); the plug-in's footprint check is the reference there. ``ssm``
+    equips the named egos, and only them, with SUMO's SSM device (:mod:`sumo_avoid.sumo.ssm`): the
+    route and additional files defining an ego are replaced by equipped copies in its folder."""
+    if ssm is not None and ssm.ego_ids:
+        routes, additional = equip(routes or (), ssm, "r"), equip(additional or (), ssm, "a")
     args = ["sumo", "-n", str(net), "--step-length", repr(step_s), "--seed", str(seed),
             "--collision.action", "warn" if sumo_collisions else "none",
             "--collision.check-junctions", "true" if sumo_collisions else "false",
@@ -59,6 +64,8 @@ def sumo_args(net: pathlib.Path, routes, additional, step_s: float, seed: int, l
         args += ["-r", ",".join(str(r) for r in routes)]
     if additional:
         args += ["-a", ",".join(str(a) for a in additional)]
+    if ssm is not None:
+        args += ssm_args(ssm)
     if log_file is not None:
         args += ["--log", str(log_file)]
     else:

@@ -96,12 +96,17 @@ def test_report_is_self_contained_and_matches_the_ledger(study, tmp_path):
             assert _close(row["min_gap_m_min"], d["min_gap_m"].min())
             assert _close(row["goal_reached_rate"], d["goal_reached"].mean())
             assert _close(row["mean_speed_mps_mean"], d["mean_speed_mps"].mean())
+            assert _close(row["min_ttc_s_min"], d["min_ttc_s"].min())
+            assert _close(row["min_ttc2d_s_min"], d["min_ttc2d_s"].min())
+            assert _close(row["wrong_way_m_max"], d["wrong_way_m"].max())
+            assert _close(row["off_road_m_max"], d["off_road_m"].max())
     runs = _frame(page.tables["runs"]).set_index("key")
     assert len(runs) == len(df) == 5
     for r in df.to_dict(orient="records"):
         shown = runs.loc[r["key"][:16]]
         assert (shown["status"], int(shown["seed"])) == (r["status"], r["seed"])
-        for c in ("collisions", "min_gap_m", "phi_wall", "mean_speed_mps"):
+        for c in ("collisions", "min_gap_m", "phi_wall", "mean_speed_mps", "min_ttc_s", "min_ttc2d_s", "max_drac_mps2",
+                  "min_pet_s", "wrong_way_m", "off_road_m", "max_abs_jerk_mps3", "max_lat_accel_mps2"):
             assert _close(shown[c], r[c])
     failed = _frame(page.tables["failed"])
     assert failed["error"].tolist() == ["worker died: SIGSEGV (segmentation fault)"]

@@ -1,0 +1,59 @@
+"""How far the egos drove where they should not: against a lane's direction, and off the road.
+
+Each ego's path is cut into its recorded steps: the segment from one row to the ego's next row,
+whose length (m) counts wholly when its midpoint qualifies, its direction being the direction of
+motion (so backing up in one's own lane is driving against it, whatever the heading).
+
+* ``wrong_way_m``: the midpoint is inside a normal lane's polygon (nearest centre line of those
+  holding it) and outside every junction shape, and that lane's direction there is more than 90°
+  from the motion (:meth:`sumo_avoid.sumo.lanes.LaneIndex.against`). None in an arena (its roads
+  only give SUMO lanes to map the flock onto).
+* ``off_road_m``: the midpoint is outside the drivable area (``Road.outside_distance`` > 0; lanes
+  incl. internal ones and junction shapes), or in an arena outside its walls or inside an obstacle.
+  φ_wall measures how far the footprint sticks out; this measures how long the centre was out.
+
+Both are summed over the egos (m), 0.0 when no ego ever moved.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from sumo_avoid.metrics.base import Metric
+from sumo_avoid.rollout.arena import outside_distance as arena_outside_distance
+from sumo_avoid.rollout.result import RunResult
+
+
+def ego_segments(traj: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+    """Every ego's consecutive rows (by step) as segments: (K,2) midpoints and (K,2) displacements, m;
+    segments of zero length are left out."""
+    e = traj[traj["is_ego"].astype(bool)]
+    code = pd.factorize(e["id"].astype(str), sort=True)[0]
+    o = np.lexsort((e["step"].to_numpy(), code))
+    code = code[o]
+    p = e[["x", "y"]].to_numpy(float)[o]
+    d = np.diff(p, axis=0)
+    keep = (code[1:] == code[:-1]) & (np.hypot(d[:, 0], d[:, 1]) > 0)
+    mid = 0.5 * (p[:-1] + p[1:])
+    return mid[keep], d[keep]
+
+
+def road_use(run: RunResult) -> dict:
+    mid, d = ego_segments(run.traj)
+    length = np.hypot(d[:, 0], d[:, 1])
+    scene = run.scene
+    if scene.walls is None:
+        out = run.road.outside_distance(mid) > 0
+        wrong = run.road.lanes.against(mid, d) if len(mid) else np.zeros(0, bool)
+        wrong_m = float(length[wrong].sum())
+    else:
+        out = arena_outside_distance(mid, scene.walls, scene.obstacles) > 0
+        wrong_m = None
+    return {"wrong_way_m": wrong_m, "off_road_m": float(length[out].sum())}
+
+
+class RoadUse(Metric):
+    """wrong_way_m and off_road_m: metres the egos' centres drove against a lane or off the road."""
+
+    def compute(self, run: RunResult) -> dict:
+        return road_use(run)
