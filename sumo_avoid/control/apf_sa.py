@@ -128,7 +128,7 @@ class ApfSaController(ApfController):
         """Shrink a lateral offset until the shifted carrot keeps the car inside its lanes with
         ``escape_margin_m`` to spare on each side (a target on the kerb is no target)."""
         need = 0.5 * sc.width + self.p.escape_margin_m
-        s_c = float(self.carrot(view, sc, 1.0)[0])
+        s_c = min(sc.s + self.lookahead(float(np.hypot(*sc.vel))), view.length_m)  # the carrot's s
         lo, hi = (float(v[0]) for v in view.corridor([s_c]))
         for k in range(int(abs(offset) / 0.25) + 1):
             o = math.copysign(max(abs(offset) - 0.25 * k, 0.0), offset)
