@@ -2,6 +2,7 @@
 nothing written; and a good run writes its outputs."""
 import json
 import math
+import pathlib
 import subprocess
 import sys
 
@@ -127,12 +128,19 @@ def test_an_unknown_edge_in_a_trip_names_the_route_file_and_the_trip(tmp_path):
     assert not out.exists()
 
 
+def _road_scenario(tmp_path, name: str, vehicles: str, ego_ids) -> pathlib.Path:
+    """A 3 s scenario on the overtaking road with the given route-file elements and egos."""
+    (tmp_path / "r.rou.xml").write_text(f"<routes>\n  {vehicles}\n</routes>\n")
+    path = tmp_path / f"{name}.toml"
+    ids = ", ".join(f'"{v}"' for v in ego_ids)
+    path.write_text(f'name = "{name}"\n[sim]\nnet = "{NETS / "overtaking.net.xml"}"\nroutes = ["r.rou.xml"]\n'
+                    f'duration_s = 3.0\n[ego]\nids = [{ids}]\n')
+    return path
+
+
 def test_an_ego_that_never_departs_exits_2_and_writes_nothing(tmp_path):
-    (tmp_path / "r.rou.xml").write_text('<routes>\n  <trip id="ego" from="road" to="road" depart="0"/>\n'
-                                        '  <trip id="late" from="road" to="road" depart="60"/>\n</routes>\n')
-    path = tmp_path / "late.toml"
-    path.write_text(f'name = "late"\n[sim]\nnet = "{NETS / "overtaking.net.xml"}"\nroutes = ["r.rou.xml"]\n'
-                    'duration_s = 3.0\n[ego]\nids = ["ego", "late"]\n')
+    path = _road_scenario(tmp_path, "late", '<trip id="ego" from="road" to="road" depart="0"/>\n'
+                          '  <trip id="late" from="road" to="road" depart="60"/>', ["ego", "late"])
     out = tmp_path / "out"
     out.mkdir()  # an existing folder stays as it was: empty
     r = cli("run", path, "--out", out, "--quiet")
@@ -143,6 +151,18 @@ def test_an_ego_that_never_departs_exits_2_and_writes_nothing(tmp_path):
     assert list(out.iterdir()) == []
     r = cli("run", path, "--out", tmp_path / "ok", "--quiet", "--no-plots", "--set", "sim.duration_s=61")
     assert r.returncode == 0, r.stderr  # it departs at 60 s: a normal run
+
+
+def test_input_sumo_rejects_only_mid_run_exits_2_naming_the_file_and_writes_nothing(tmp_path):
+    """An invalid departLane passes SUMO's load and stops it only when it inserts the vehicle."""
+    path = _road_scenario(tmp_path, "lane", '<trip id="ego" from="road" to="road" depart="1" departLane="7"/>', ["ego"])
+    out = tmp_path / "out"
+    r = cli("run", path, "--out", out, "--quiet")
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"sumo-avoid: error: {path}: key 'sim.routes[0]': "), lines
+    assert "departLane" in lines[0] and "vehicle 'ego'" in lines[0]
+    assert not out.exists()
 
 
 def test_sumo_warnings_go_to_sumo_log_and_are_counted(tmp_path):

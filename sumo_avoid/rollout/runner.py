@@ -21,7 +21,7 @@ from sumo_avoid.rollout.recorder import Recorder
 from sumo_avoid.rollout.result import RunResult, Scene
 from sumo_avoid.scenario.spec import sumo_load_error
 from sumo_avoid.sumo.road import Road
-from sumo_avoid.sumo.sim import SumoSim, SumoStartError, sumo_args
+from sumo_avoid.sumo.sim import SumoSim, SumoStartError, SumoStepError, sumo_args
 from sumo_avoid.sumo.ssm import SsmParams, SsmRequest, read_conflicts
 
 
@@ -54,8 +54,8 @@ def never_departed_error(scn, missing: list[str], time_s: float, waiting) -> Sce
 
 def run(scn, *, log_file=None, progress: bool = False) -> RunResult:
     """Run one scenario. Raises :class:`ScenarioError` (one line, naming the scenario file and key)
-    for input found bad only once SUMO runs: files SUMO cannot load, a goal edge not on an ego's
-    route, an ego that never departed."""
+    for input found bad only once SUMO runs: files SUMO cannot load (at the start or when it gets to
+    an element, e.g. an invalid departLane), a goal edge not on an ego's route, an ego that never departed."""
     spec = scn.spec
     t_start = time.perf_counter()
     arena = spec.arena
@@ -89,6 +89,8 @@ def run(scn, *, log_file=None, progress: bool = False) -> RunResult:
                                 [Progress(spec.sim.duration_s)] if progress else [])
             except FieldError as e:  # a goal edge not on the route SUMO gave the ego
                 raise ScenarioError(str(scn.path), e.key, e.expected, e.got, show_got=e.show_got) from None
+            except SumoStepError as e:  # input SUMO rejects only when it gets to it
+                raise sumo_load_error(scn, str(e)) from None
             sim_time = sim.time_s
             if egos.never_departed():
                 raise never_departed_error(scn, egos.never_departed(), sim_time, sim.waiting())

@@ -295,6 +295,7 @@ def _edges_in(path: str, mtime_ns: int, size: int) -> frozenset[str]:
 
 
 _DEFINED = ("vehicle", "trip", "flow", "route", "person", "container")
+_SAME_KIND = {"vehicle": ("vehicle", "trip"), "trip": ("trip", "vehicle")}
 
 
 @functools.lru_cache(maxsize=64)
@@ -336,8 +337,9 @@ def sumo_load_error(scn: Scenario, message: str) -> ScenarioError:
     keyed = [(f"sim.routes[{i}]", f) for i, f in enumerate(scn.route_files)]
     keyed += [(f"sim.additional[{i}]", f) for i, f in enumerate(scn.additional_files)]
     for tag, eid in re.findall(r"\b(" + "|".join(_DEFINED) + r") '([^']*)'", sumo):
+        kinds = _SAME_KIND.get(tag, (tag,))  # SUMO calls a <trip> a vehicle once it is inserted
         for key, f in keyed:
-            if (tag, eid) in _elements(f):
+            if any((k, eid) in _elements(f) for k in kinds):
                 return ScenarioError(str(scn.path), key, f"a file SUMO can load: {f}, {tag} '{eid}' (SUMO: {sumo})",
                                      show_got=False)
     return ScenarioError(str(scn.path), "sim", f"files SUMO can load (SUMO: {sumo})", show_got=False)

@@ -77,6 +77,11 @@ class SumoStartError(RuntimeError):
     """SUMO refused to load the network, routes or additional files."""
 
 
+class SumoStepError(RuntimeError):
+    """SUMO stopped on the scenario's input during a step (e.g. a vehicle's invalid departLane,
+    found only when SUMO inserts it)."""
+
+
 class SumoSim:
     """One running SUMO (libsumo allows one per process: parallel runs need processes)."""
 
@@ -188,7 +193,10 @@ class SumoSim:
 
     # --- stepping --------------------------------------------------------------------------
     def step(self) -> list[SumoCollision]:
-        libsumo.simulationStep()
+        try:
+            libsumo.simulationStep()
+        except (libsumo.TraCIException, libsumo.FatalTraCIError) as e:
+            raise SumoStepError(" ".join(str(e).split())) from None
         arrived = libsumo.simulation.getSubscriptionResults()[libsumo.constants.VAR_ARRIVED_VEHICLES_IDS]
         for vid in arrived:
             self._dims.pop(vid, None)
