@@ -33,6 +33,8 @@ class Snapshot:
     is_ego: np.ndarray  # (N,) bool, vehicles driven by the plug-in
     index: dict = field(default_factory=dict, compare=False, repr=False)  # id -> row
     signals: Mapping[str, str] = field(default_factory=dict)  # traffic light id -> state string ('rGyG...')
+    lane: tuple[str, ...] = ()  # (N,) SUMO lane id each vehicle is on ("" = none / not known)
+    lane_pos: np.ndarray | None = None  # (N,) SUMO position of the front bumper along that lane, m (nan = not known)
 
     def __post_init__(self):
         n = len(self.ids)
@@ -44,6 +46,9 @@ class Snapshot:
         object.__setattr__(self, "ids", tuple(self.ids))
         object.__setattr__(self, "index", {vid: i for i, vid in enumerate(self.ids)})
         object.__setattr__(self, "signals", MappingProxyType(dict(self.signals)))
+        object.__setattr__(self, "lane", tuple(self.lane) if len(self.lane) == n else ("",) * n)
+        lane_pos = np.full(n, np.nan) if self.lane_pos is None or len(self.lane_pos) != n else self.lane_pos
+        object.__setattr__(self, "lane_pos", _frozen(lane_pos).reshape(n))
 
     @property
     def n(self) -> int:
@@ -58,7 +63,7 @@ class Snapshot:
         return np.flatnonzero(self.is_ego)
 
     @staticmethod
-    def empty(time_s: float = 0.0, signals: Mapping[str, str] | None = None) -> "Snapshot":
+    def empty(time_s: float = 0.0, signals: Mapping[str, str] | None = None) -> Snapshot:
         z = np.zeros(0)
         return Snapshot(time_s, (), np.zeros((0, 2)), np.zeros((0, 2)), z, z, z, np.zeros(0, bool),
                         signals=signals or {})

@@ -16,6 +16,18 @@ from sumo_avoid.core.snapshot import Snapshot
 
 
 @dataclass(frozen=True)
+class FoeLink:
+    """A junction link with priority over one of the ego's links (they cross or merge), from the
+    net's junction logic (static): its signal, and where its vehicles come from."""
+
+    tls: str = ""  # traffic light id, "" = not signalised
+    link_index: int = -1  # index into the light's state string
+    state: str = ""  # static right of way in the net (M, m, =, ...)
+    direction: str = ""  # s, l, r, t, L, R
+    approach: tuple[tuple[str, float], ...] = ()  # (SUMO lane id, distance from the lane's start to the conflict point), m
+
+
+@dataclass(frozen=True)
 class RouteLink:
     """A junction link the ego's route passes (from the net, static): where its stop line is on
     the ego's reference path and which signal, if any, controls it."""
@@ -26,6 +38,7 @@ class RouteLink:
     link_index: int = -1  # index into the light's state string (SUMO linkIndex)
     state: str = ""  # the connection's static right of way in the net: M major, m minor, = equal, s stop, ...
     direction: str = ""  # s straight, l left, r right, t turn, L/R partly left/right
+    foes: tuple[FoeLink, ...] = ()  # links with priority over this one (sumo.right_of_way)
 
 
 @dataclass(frozen=True)

@@ -5,6 +5,13 @@ run with ``ego.rules = "none"`` is measured the same way).
 while its link shows 'r' / 'u' at the earlier step, or 'y' when, at the onset of that yellow, the
 ego could have stopped comfortably (v^2 / (2 b_comf) <= distance to the line, b_comf of the
 scenario's ``[rules]``). Details per crossing in ``signal_crossings`` (ego, tls, link, time, state).
+
+``yield_violations``: the ego's front bumper crosses the stop line of a link that must give way at
+that moment (:mod:`sumo_avoid.safety.yielding`) while a recorded vehicle of a foe link with
+priority arrives at its conflict point within the critical gap t_c of the ego's movement
+(``[rules]`` critical_gap_s / critical_gap_left_s; SUMO's lane positions from the recording).
+Details per crossing of a yielding link in ``yield_crossings`` (ego, junction, time, state, the
+first foe and its arrival time, s).
 """
 from __future__ import annotations
 
@@ -14,6 +21,14 @@ from sumo_avoid.core.polyline import polyline_track
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.rollout.result import RunResult
 from sumo_avoid.safety.rules import RED
+from sumo_avoid.safety.yielding import (
+    critical_gap_s,
+    first_crossing,
+    foe_arrival,
+    link_state,
+    rows_by_lane,
+    yields,
+)
 
 
 def _state_at(sig, tls: str, t: float) -> tuple[str, float]:
@@ -24,27 +39,39 @@ def _state_at(sig, tls: str, t: float) -> tuple[str, float]:
     return rows["state"].iloc[-1], float(rows["time_s"].iloc[-1])
 
 
+def _signals_at(sig, t: float) -> dict[str, str]:
+    """Every light's state string at time ``t``."""
+    if sig is None or sig.empty:
+        return {}
+    rows = sig[sig["time_s"] <= t + 1e-9]
+    return dict(zip(rows["tls"], rows["state"]))  # later rows win
+
+
+def _ego_tracks(run: RunResult, want):
+    """(ego id, task, its recorded rows, front bumper s along the route path) for the egos whose
+    task has a link ``want(link)`` is true for."""
+    traj = run.traj[run.traj["is_ego"]]
+    for vid, task in run.tasks.items():
+        ego = traj[traj["id"] == vid]
+        if not any(want(lk) for lk in task.links) or len(ego) < 2:
+            continue
+        h = ego["heading"].to_numpy()
+        front = ego[["x", "y"]].to_numpy() + 0.5 * ego["length"].to_numpy()[:, None] * np.column_stack([np.cos(h), np.sin(h)])
+        yield vid, task, ego, polyline_track(task.path, front)
+
+
 def signal_crossings(run: RunResult) -> list[dict]:
     sig = run.signals
     if sig is None or sig.empty or not run.tasks:
         return []
     b = run.scenario.spec.rules.comfort_decel_mps2
     out = []
-    traj = run.traj[run.traj["is_ego"]]
-    for vid, task in run.tasks.items():
-        links = [lk for lk in task.links if lk.tls]
-        ego = traj[traj["id"] == vid]
-        if not links or len(ego) < 2:
-            continue
-        h = ego["heading"].to_numpy()
-        front = ego[["x", "y"]].to_numpy() + 0.5 * ego["length"].to_numpy()[:, None] * np.column_stack([np.cos(h), np.sin(h)])
-        s = polyline_track(task.path, front)
+    for vid, task, ego, s in _ego_tracks(run, lambda lk: bool(lk.tls)):
         t, v = ego["time_s"].to_numpy(), ego["speed"].to_numpy()
-        for lk in links:
-            k = np.flatnonzero((s[:-1] < lk.s_stop_m) & (s[1:] >= lk.s_stop_m))
-            if not len(k):
+        for lk in (lk for lk in task.links if lk.tls):
+            k = first_crossing(s, lk.s_stop_m)
+            if k < 0:
                 continue
-            k = int(k[0])
             state, since = _state_at(sig, lk.tls, t[k])
             c = state[lk.link_index] if 0 <= lk.link_index < len(state) else ""
             violation = c in RED
@@ -56,8 +83,36 @@ def signal_crossings(run: RunResult) -> list[dict]:
     return out
 
 
+def yield_crossings(run: RunResult) -> list[dict]:
+    if not run.tasks or "lane" not in run.traj:
+        return []
+    p = run.scenario.spec.rules
+    traj = run.traj
+    out = []
+    for vid, task, ego, s in _ego_tracks(run, lambda lk: bool(lk.foes)):
+        steps, t = ego["step"].to_numpy(), ego["time_s"].to_numpy()
+        for lk in (lk for lk in task.links if lk.foes):
+            k = first_crossing(s, lk.s_stop_m)
+            signals = _signals_at(run.signals, t[k]) if k >= 0 else {}
+            if k < 0 or not yields(lk, signals):
+                continue
+            now = traj[traj["step"] == steps[k]]
+            ids = now["id"].to_numpy()
+            t_f, who = foe_arrival(lk.foes, signals, rows_by_lane(now["lane"].fillna("").to_numpy()), now["lane_pos"].to_numpy(float),
+                                   now["speed"].to_numpy(float), now["length"].to_numpy(float),
+                                   set(np.flatnonzero(ids == vid).tolist()))
+            t_c = critical_gap_s(lk.direction, p.critical_gap_s, p.critical_gap_left_s)
+            out.append({"ego": vid, "junction": lk.junction, "time_s": float(t[k + 1]),
+                        "state": link_state(signals, lk.tls, lk.link_index, lk.state),
+                        "foe": str(ids[who]) if who >= 0 else "", "foe_arrival_s": None if who < 0 else round(t_f, 3),
+                        "violation": bool(t_f < t_c)})
+    return out
+
+
 class RuleViolations(Metric):
     def compute(self, run: RunResult) -> dict:
         crossings = signal_crossings(run)
+        yielding = yield_crossings(run)
         return {"red_light_violations": sum(c["violation"] for c in crossings),
-                "signal_crossings": crossings}
+                "signal_crossings": crossings,
+                "yield_violations": sum(c["violation"] for c in yielding), "yield_crossings": yielding}

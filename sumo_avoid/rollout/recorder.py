@@ -1,6 +1,7 @@
 """Per-step recording of the world into arrays; becomes one pandas table after the run.
 
-Egos are always recorded; other vehicles only within ``record_radius_m`` of an ego (0 = all), to
+Columns: :data:`COLUMNS` (``lane``, ``lane_pos``: where SUMO has the vehicle, its lane id and
+the front bumper's position along it; "" / empty where SUMO has it on no lane). Egos are always recorded; other vehicles only within ``record_radius_m`` of an ego (0 = all), to
 keep big-traffic runs small. Headings are written wrapped to (-pi, pi]. SUMO's own collision reports are kept beside, one event per pair and
 contact episode (consecutive steps), the same rule as the plug-in's own events.
 """
@@ -12,7 +13,8 @@ import pandas as pd
 from sumo_avoid.core.geometry import near_any
 from sumo_avoid.core.snapshot import Snapshot
 
-COLUMNS = ["step", "time_s", "id", "is_ego", "x", "y", "vx", "vy", "speed", "heading", "length", "width"]
+COLUMNS = ["step", "time_s", "id", "is_ego", "x", "y", "vx", "vy", "speed", "heading", "length", "width", "lane",
+           "lane_pos"]
 
 
 def wrap_angle(a) -> np.ndarray:
@@ -48,7 +50,8 @@ class Recorder:
             return
         ids = np.array(snap.ids, dtype=object)[idx]
         self._chunks.append((step, snap.time_s, ids, snap.is_ego[idx], snap.pos[idx], snap.vel[idx],
-                             snap.heading[idx], snap.length[idx], snap.width[idx]))
+                             snap.heading[idx], snap.length[idx], snap.width[idx],
+                             np.array(snap.lane, dtype=object)[idx], snap.lane_pos[idx]))
 
     def record_sumo_collisions(self, step: int, collisions) -> None:
         for c in collisions:
@@ -75,6 +78,8 @@ class Recorder:
             "heading": wrap_angle(np.concatenate([c[6] for c in self._chunks])),
             "length": np.concatenate([c[7] for c in self._chunks]),
             "width": np.concatenate([c[8] for c in self._chunks]),
+            "lane": np.concatenate([c[9] for c in self._chunks]).astype(str),
+            "lane_pos": np.concatenate([c[10] for c in self._chunks]),
         })
 
     def signals(self) -> pd.DataFrame:

@@ -7,10 +7,16 @@ Per ego and step, with s the arc length of the ego's front bumper projected on i
 * **Signals.** For every signalised link ahead within ``lookahead_m`` (its state from the
   snapshot's ``signals``, index ``link_index``): 'r' / 'u' (red, red-yellow) -> stop; 'y' -> stop
   when the stop is comfortable, v^2 / (2 b_comf) <= distance - margin, decided once at the onset
-  of the yellow (no flip-flop while braking) and else go on; 'G' / 'g' / 'o' / 'O' -> go (yielding
-  on 'g' is the right-of-way part, not done yet). A stop caps the speed at the braking curve
+  of the yellow (no flip-flop while braking) and else go on; 'G' / 'g' / 'o' / 'O' -> go, 'g' and
+  'o' subject to right of way. A stop caps the speed at the braking curve
   sqrt(2 b_comf (d - margin)), d the distance of the front bumper to the stop line, so the ego
   stops ``stop_margin_m`` before the line.
+* **Right of way.** At the next link ahead that must give way now (minor, permissive green,
+  equal, roundabout entry, merge; :mod:`sumo_avoid.safety.yielding`), the ego is held at its stop
+  line by the same braking curve while a vehicle of a foe link with priority would reach the
+  conflict point within the critical gap (plus a margin) after the ego reaches the line; an ego
+  that could stop before the line only braking harder than ``commit_decel_mps2`` goes on, and
+  past the line it never stops for a foe (it clears the junction).
 * **Speed for the road ahead.** v <= sqrt(v_i^2 + 2 b_comf (s_i - s)) for every lane piece i
   starting within ``lookahead_m`` at s_i with speed limit v_i x ``speed_factor`` (SUMO's
   speedFactor idea; junction internal lanes carry netconvert's turning speeds). Off by default
@@ -25,8 +31,8 @@ The command (desired velocity, m/s) keeps its direction; only its length is capp
 line works as a virtual obstacle that no controller can drive through; SPEC §5 hands it to the
 controller as one, which a potential-field controller would also steer around (the departure is
 deliberate: a stop line is not something to swerve past). Counters: ``rules_signal_stops``
-(episodes of an ego held by a signal), ``rules_speed_caps`` (steps where the road speed capped
-the command).
+(episodes of an ego held by a signal), ``rules_yields`` (episodes of an ego giving way, one per
+ego and line), ``rules_speed_caps`` (steps where the road speed capped the command).
 """
 from __future__ import annotations
 
@@ -38,6 +44,13 @@ import numpy as np
 from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.polyline import polyline_track
 from sumo_avoid.core.types import EgoTask
+from sumo_avoid.safety.yielding import (
+    critical_gap_s,
+    ego_time_to_line,
+    foe_arrival,
+    rows_by_lane,
+    yields,
+)
 
 STOP, GO = "stop", "go"
 RED = frozenset("ru")
@@ -52,6 +65,14 @@ class RulesParams:
                                            doc="lane speed limit x this = highest speed; default: not enforced "
                                                "(docs: enforcing it stalls APF-SA on left_turn today)")
     lookahead_m: float = field_doc(250.0, positive=True, doc="signals and speed limits this far ahead count, m")
+    critical_gap_s: float = field_doc(4.5, positive=True, doc="t_c: a foe with priority must arrive at the conflict "
+                                                               "point at least this long after the ego reaches the "
+                                                               "line (straight, right, merges; s)")
+    critical_gap_left_s: float = field_doc(5.0, positive=True, doc="t_c of left turns and U-turns, s")
+    gap_margin_s: float = field_doc(0.5, doc="the layer accepts a gap only this much longer than t_c (foes may "
+                                             "speed up; the metric judges against t_c), s")
+    commit_decel_mps2: float = field_doc(6.0, positive=True, doc="an ego that could stop before a yield line only "
+                                                                  "braking harder than this goes on, m/s^2")
 
 
 @dataclass
@@ -93,9 +114,10 @@ class TrafficRulesLayer:
         self._egos: dict[str, _Ego] = {}
         self._held: set[tuple[str, float]] = set()  # (ego, stop line s) where a signal held the ego
         self._caps = 0
+        self._yields: set[tuple[str, float]] = set()  # (ego, stop line s) where the ego gave way
 
     def add_ego(self, task: EgoTask) -> None:
-        watch = any(lk.tls for lk in task.links) or self.p.speed_factor is not None
+        watch = any(lk.tls or lk.foes for lk in task.links) or self.p.speed_factor is not None
         self._egos[task.vid] = _Ego(task, watch)
 
     def remove_ego(self, vid: str) -> None:
@@ -119,9 +141,29 @@ class TrafficRulesLayer:
                     cap, line = here, link.s_stop_m
         return cap, line
 
+    def _yield_cap(self, e: _Ego, snap, lanes, row: int, v: float) -> tuple[float, float]:
+        """(speed cap, s of the yield line that sets it): stop before the next link that must give
+        way while a foe with priority arrives within the critical gap (:mod:`.yielding`)."""
+        p = self.p
+        for link in e.task.links:
+            d = link.s_stop_m - e.s_m
+            if d <= 0 or not link.foes:
+                continue
+            if d > p.lookahead_m:
+                break
+            if not yields(link, snap.signals) or v * v / (2.0 * p.commit_decel_mps2) > d:
+                continue  # priority now, or too late to stop: go on
+            t_f, _ = foe_arrival(link.foes, snap.signals, lanes, snap.lane_pos, snap.speed, snap.length, {row})
+            t_c = critical_gap_s(link.direction, p.critical_gap_s, p.critical_gap_left_s)
+            if t_f < ego_time_to_line(d, v, p.stop_margin_m) + t_c + p.gap_margin_s:
+                return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
+            return math.inf, -1.0  # the nearest yield line ahead is clear: the ones after it wait their turn
+        return math.inf, -1.0
+
     def filter(self, obs, command: np.ndarray) -> np.ndarray:
         snap = obs.snapshot
         out = np.array(command, dtype=float, copy=True)
+        lanes = None
         for i, vid in enumerate(obs.ego_ids):
             e = self._egos.get(vid)
             if e is None or not e.watch:  # no signal on the route, no speed limits enforced: nothing to do
@@ -136,12 +178,18 @@ class TrafficRulesLayer:
             road = road_speed_cap(e.task, e.s_m, self.p)
             if sig < v or sig < 0.5:  # one episode per ego and stop line, however often the cap binds
                 self._held.add((vid, line))
+            if lanes is None:
+                lanes = rows_by_lane(snap.lane)
+            give, yline = self._yield_cap(e, snap, lanes, int(r), v)
+            if give < v or give < 0.5:
+                self._yields.add((vid, yline))
             speed = math.hypot(out[i, 0], out[i, 1])
-            cap = min(sig, road)
+            cap = min(sig, road, give)
             if speed > cap:
-                self._caps += road < sig
+                self._caps += road < min(sig, give)
                 out[i] *= cap / speed
         return out
 
     def stats(self) -> dict:
-        return {"rules_signal_stops": len(self._held), "rules_speed_caps": self._caps}
+        return {"rules_signal_stops": len(self._held), "rules_speed_caps": self._caps,
+                "rules_yields": len(self._yields)}

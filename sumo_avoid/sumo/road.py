@@ -32,6 +32,7 @@ from sumo_avoid.core.polyline import (
 )
 from sumo_avoid.core.types import LanePiece, RouteLink
 from sumo_avoid.sumo.lanes import LaneIndex
+from sumo_avoid.sumo.right_of_way import RightOfWay
 
 
 class RoutePlan(NamedTuple):
@@ -308,11 +309,11 @@ class Road:
                             for (edge, lane, o0, o1, w, _), a, b in zip(piece_at, starts, ends))
         return RoutePlan(path, links, limits, lane_pieces)
 
-    @staticmethod
-    def _link(conn, s_stop_m: float) -> RouteLink:
+    def _link(self, conn, s_stop_m: float) -> RouteLink:
         tls = conn.getTLSID() or ""
         return RouteLink(float(s_stop_m), conn.getFrom().getToNode().getID(), tls,
-                         int(conn.getTLLinkIndex()) if tls else -1, conn.getState() or "", conn.getDirection() or "")
+                         int(conn.getTLLinkIndex()) if tls else -1, conn.getState() or "", conn.getDirection() or "",
+                         self.right_of_way.foes(conn))
 
     def _via_lanes(self, conn) -> list[tuple]:
         """(lane, shape, speed limit) of the chain of internal lanes of a connection (possibly split in several)."""
@@ -358,6 +359,11 @@ class Road:
 
     def __repr__(self) -> str:
         return f"Road({os.path.basename(self.source)!r}, area={self.area.area:.0f} m2, bounds={self.bounds})"
+
+    @functools.cached_property
+    def right_of_way(self) -> RightOfWay:
+        """The junction logic (which links yield to which), built on first use."""
+        return RightOfWay(self._net)
 
     # ------------------------------------------------------------------ lane lookup (metrics)
     @functools.cached_property

@@ -22,7 +22,8 @@ import numpy as np
 from sumo_avoid.core.snapshot import Snapshot
 from sumo_avoid.sumo.ssm import SsmRequest, equip, ssm_args
 
-_DYNAMIC = (libsumo.constants.VAR_POSITION, libsumo.constants.VAR_ANGLE, libsumo.constants.VAR_SPEED)
+_DYNAMIC = (libsumo.constants.VAR_POSITION, libsumo.constants.VAR_ANGLE, libsumo.constants.VAR_SPEED,
+            libsumo.constants.VAR_LANE_ID, libsumo.constants.VAR_LANEPOSITION)
 _SIM_VARS = (libsumo.constants.VAR_DEPARTED_VEHICLES_IDS, libsumo.constants.VAR_ARRIVED_VEHICLES_IDS)
 EGO_SPEED_MODE = 32  # all of SUMO's speed safety checks off (verified: a commanded crash happens)
 EGO_LANE_CHANGE_MODE = 0  # SUMO changes no lanes for the ego: the plug-in is in charge
@@ -128,14 +129,16 @@ class SumoSim:
             return Snapshot.empty(self.time_s, signals)
         rows = res.values() if n == len(key) else [res[v] for v in ids]
         c = libsumo.constants
-        P, A, S = c.VAR_POSITION, c.VAR_ANGLE, c.VAR_SPEED
-        flat = np.fromiter(itertools.chain.from_iterable((*r[P], r[A], r[S]) for r in rows), float, 4 * n)
-        flat = flat.reshape(n, 4)  # front bumper x, y, compass angle (deg), speed
+        P, A, S, LP = c.VAR_POSITION, c.VAR_ANGLE, c.VAR_SPEED, c.VAR_LANEPOSITION
+        flat = np.fromiter(itertools.chain.from_iterable((*r[P], r[A], r[S], r[LP]) for r in rows), float, 5 * n)
+        flat = flat.reshape(n, 5)  # front bumper x, y, compass angle (deg), speed, lane position
+        lane = tuple(r[c.VAR_LANE_ID] for r in rows)
         heading = np.radians(90.0 - flat[:, 2])
         direction = np.column_stack([np.cos(heading), np.sin(heading)])
         centre = flat[:, :2] - direction * (dims[:, :1] / 2.0)
         return Snapshot(self.time_s, ids, centre, direction * flat[:, 3:4], heading,
-                        dims[:, 0], dims[:, 1], is_ego, signals=signals)
+                        dims[:, 0], dims[:, 1], is_ego, signals=signals, lane=lane,
+                        lane_pos=np.where([bool(x) for x in lane], flat[:, 4], np.nan))
 
     @staticmethod
     def _signals() -> dict[str, str]:

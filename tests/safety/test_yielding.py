@@ -1,0 +1,112 @@
+"""Right of way: the junction logic read from the net, gap acceptance (pure, pinned by hand), and
+a roundabout entry on real SUMO. The roundabout is built here by netconvert from the plain XML in
+tests/data/roundabout (ring radius 20 m, four single-lane arms); a circulating vehicle reaches the
+south entry about when the ego (APF-SA, 10 m/s) does."""
+import math
+import pathlib
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+import sumo
+
+from sumo_avoid import outputs
+from sumo_avoid.core.types import FoeLink, RouteLink
+from sumo_avoid.rollout import runner
+from sumo_avoid.safety.yielding import critical_gap_s, ego_time_to_line, foe_arrival, link_state, rows_by_lane, yields
+from sumo_avoid.scenario import spec as scenario
+from sumo_avoid.sumo.road import Road
+
+BIN = pathlib.Path(sumo.SUMO_HOME) / "bin"
+DATA = pathlib.Path(__file__).parent.parent / "data"
+
+
+def test_link_state_and_who_yields():
+    minor = RouteLink(100.0, "J", state="m", foes=(FoeLink(state="M"),))
+    assert yields(minor, {}) and link_state({}, "", -1, "m") == "m"
+    assert not yields(RouteLink(100.0, "J", state="M", foes=(FoeLink(),)), {})  # major: never
+    assert not yields(RouteLink(100.0, "J", state="m"), {})  # no foes
+    signalled = RouteLink(100.0, "J", tls="T", link_index=1, state="o", foes=(FoeLink(),))
+    assert yields(signalled, {"T": "GgG"})  # permissive green
+    assert not yields(signalled, {"T": "GGG"}) and not yields(signalled, {"T": "rrr"})  # major green; red is the signal's
+    assert critical_gap_s("l", 4.5, 5.0) == 5.0 and critical_gap_s("t", 4.5, 5.0) == 5.0
+    assert critical_gap_s("s", 4.5, 5.0) == 4.5 and critical_gap_s("r", 4.5, 5.0) == 4.5
+
+
+def test_foe_arrival_by_hand():
+    # foe link: conflict 10 m into internal lane ":J_1_0"; its incoming lane "a_0" is 100 m long
+    foe = FoeLink(state="M", approach=((":J_1_0", 10.0), ("a_0", 110.0)))
+    lanes = rows_by_lane(["a_0", ":J_1_0", "", "a_0"])
+    lane_pos = np.array([80.0, 4.0, np.nan, 20.0])
+    speed = np.array([10.0, 0.5, 0.0, 15.0])
+    length = np.full(4, 5.0)
+    # row 0: (110 - 80) / 10 = 3.0 s; row 1: (10 - 4) / max(0.5, 1) = 6.0 s; row 3: 90 / 15 = 6.0 s
+    t, who = foe_arrival((foe,), {}, lanes, lane_pos, speed, length, set())
+    assert (t, who) == (pytest.approx(3.0), 0)
+    t, who = foe_arrival((foe,), {}, lanes, lane_pos, speed, length, {0})  # the ego itself is excluded
+    assert (t, who) == (pytest.approx(6.0), 1)
+    passed = np.array([80.0, 14.9, np.nan, 20.0])  # 4.9 m past the conflict with 5 m length: still in it
+    assert foe_arrival((foe,), {}, lanes, passed, speed, length, {0, 3}) == (0.0, 1)
+    gone = np.array([80.0, 15.1, np.nan, 20.0])  # clear of it
+    assert foe_arrival((foe,), {}, lanes, gone, speed, length, {0, 3}) == (math.inf, -1)
+    red = FoeLink(tls="T", link_index=0, state="M", approach=foe.approach)
+    assert foe_arrival((red,), {"T": "r"}, lanes, lane_pos, speed, length, set()) == (math.inf, -1)
+    assert ego_time_to_line(21.0, 10.0, 1.0) == pytest.approx(2.0)
+    assert ego_time_to_line(5.0, 0.0, 1.0) == pytest.approx(4.0)  # standing: 1 m/s floor
+
+
+def test_junction_logic_from_the_net():
+    """left_turn net: the ego's left turn S2C -> C2W (minor 'm') yields to the oncoming N2C
+    straight links (major 'M'), and only to them; their approach starts at N2C's lanes."""
+    road = Road.from_net_file(DATA.parent.parent / "nets" / "left_turn.net.xml")
+    (link,) = road.route(["S2C", "C2W"], depart_lane=1).links
+    assert link.state == "m" and link.direction == "l"
+    assert [(f.state, f.direction) for f in link.foes] == [("M", "s"), ("M", "s")]
+    for f in link.foes:
+        lanes = dict(f.approach)
+        assert {ln.split("_")[0] for ln in lanes if not ln.startswith(":")} == {"N2C"}
+        internal = [v for k, v in lanes.items() if k.startswith(":")]
+        assert len(internal) == 1 and 0.0 < internal[0] < 25.0  # conflict inside the junction
+
+
+@pytest.fixture(scope="module")
+def roundabout(tmp_path_factory):
+    d = tmp_path_factory.mktemp("rb")
+    for f in ("rb.nod.xml", "rb.edg.xml"):
+        shutil.copy(DATA / "roundabout" / f, d / f)
+    subprocess.run([str(BIN / "netconvert"), "-n", str(d / "rb.nod.xml"), "-e", str(d / "rb.edg.xml"),
+                    "--no-turnarounds", "true", "-o", str(d / "rb.net.xml")], check=True, capture_output=True)
+    (d / "rb.rou.xml").write_text(
+        '<routes>\n  <vType id="car" length="4.5" width="1.8" accel="2.6" decel="4.5" maxSpeed="20"/>\n'
+        '  <vehicle id="circ" type="car" depart="0" departPos="40" departSpeed="10">'
+        '<route edges="W_in ring_WS ring_SE E_out"/></vehicle>\n'
+        '  <vehicle id="ego" type="car" depart="0" departPos="20" departSpeed="10">'
+        '<route edges="S_in ring_SE ring_EN N_out"/></vehicle>\n</routes>\n')
+    return d
+
+
+def _run(d, rules):
+    f = d / f"rb_{rules}.toml"
+    f.write_text('name = "rb"\n[sim]\nnet = "rb.net.xml"\nroutes = ["rb.rou.xml"]\nstep_s = 0.1\nduration_s = 45.0\n'
+                 f'seed = 1\n[ego]\nids = ["ego"]\ncontroller = "apf_sa"\ncruise_speed_mps = 10.0\nrules = "{rules}"\n')
+    return outputs.run_metrics(runner.run(scenario.load(f)))
+
+
+@pytest.mark.sumo
+def test_roundabout_entry_waits_for_the_circulating_vehicle(roundabout):
+    m = _run(roundabout, "traffic")
+    (entry,) = m["yield_crossings"]
+    assert entry["junction"] == "rS" and entry["state"] == "m"
+    assert m["rules_yields"] == 1 and m["yield_violations"] == 0
+    assert entry["foe"] in ("", "circ") and (entry["foe_arrival_s"] is None or entry["foe_arrival_s"] > 4.5)
+    assert m["collisions"] == 0 and m["sumo_collisions"] == 0 and m["goal_reached"]
+    assert m["phi_wall"] == 0.0
+
+
+@pytest.mark.sumo
+def test_without_the_rules_layer_the_ego_cuts_in_and_the_metric_says_so(roundabout):
+    m = _run(roundabout, "none")
+    (entry,) = m["yield_crossings"]
+    assert entry["violation"] and entry["foe"] == "circ" and entry["foe_arrival_s"] < 4.5
+    assert m["yield_violations"] == 1
