@@ -71,6 +71,19 @@ class RouteLanes:
         return np.interp(s, self._s, self._lo) - m, np.interp(s, self._s, self._hi) + m
 
 
+    def lane_at(self, s: float, d: float) -> tuple[str, int] | None:
+        """(SUMO edge id, lane index) of the lane of the ego's direction nearest to (s, d), or None
+        when d is outside the corridor at s (off the route: in an oncoming lane, off the road)."""
+        lo, hi = self.corridor([s])
+        if not lo[0] <= d <= hi[0]:
+            return None
+        starts = [p.s_start_m for p in self.pieces]
+        p = self.pieces[max(0, min(int(np.searchsorted(starts, s, side="right")) - 1, len(self.pieces) - 1))]
+        f = 0.0 if p.s_end_m - p.s_start_m <= _EPS else min(max((s - p.s_start_m) / (p.s_end_m - p.s_start_m), 0.0), 1.0)
+        centres = (1.0 - f) * np.asarray(p.offsets_start_m) + f * np.asarray(p.offsets_end_m)
+        return p.edge, int(np.argmin(np.abs(centres - d)))
+
+
 def _bounds(offsets, w) -> tuple[float, float]:
     o = np.asarray(offsets, float)
     return float((o - 0.5 * w).min()), float((o + 0.5 * w).max())

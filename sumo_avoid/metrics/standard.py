@@ -67,7 +67,47 @@ class Collisions(Metric):
         return {"collisions": int(len(events)), "collision_events": events.to_dict(orient="records"),
                 "sumo_collisions": int(len(sumo)), "sumo_collision_events": sumo.to_dict(orient="records"),
                 "collision_pairs_only_ours": sorted(map(list, ours - theirs)),
-                "collision_pairs_only_sumo": sorted(map(list, theirs - ours))}
+                "collision_pairs_only_sumo": sorted(map(list, theirs - ours)),
+                "collision_disagreements": disagreements(run.traj, events, sumo, ours - theirs, theirs - ours)}
+
+
+def _lanes_at(traj, step, ids) -> list[str]:
+    if "lane" not in traj:
+        return ["" for _ in ids]
+    now = traj[traj["step"] == step]
+    lane = dict(zip(now["id"].astype(str), now["lane"].fillna("").astype(str)))
+    return [lane.get(v, "") for v in ids]
+
+
+def why_only_ours(la: str, lb: str, a: str, b: str) -> str:
+    """Why SUMO's lane-based check would miss a contact our footprints found, from the lanes SUMO
+    had the two vehicles on (SUMO checks vehicles on one lane, or on conflicting links in a junction)."""
+    if not la or not lb:
+        return f"'{a if not la else b}' is on no lane in SUMO's view (off the network)"
+    if la.startswith(":") and lb.startswith(":"):
+        return (f"both inside junction {la[1:].rsplit('_', 2)[0]} ({la}, {lb}): SUMO checks a junction only "
+                f"between links it knows to conflict, never on an unregulated one")
+    if la.rsplit("_", 1)[0] != lb.rsplit("_", 1)[0]:
+        return f"on different edges in SUMO's view ({la}, {lb}): SUMO checks vehicles on the same lane"
+    if la != lb:
+        return f"on neighbouring lanes in SUMO's view ({la}, {lb}): a lateral contact across a lane border"
+    return f"on the same lane in SUMO's view ({la}): SUMO measures the gap along the lane, we the footprints"
+
+
+def disagreements(traj, events, sumo, only_ours, only_sumo) -> list[dict]:
+    """One line per vehicle pair only one of the two collision checks found, and why."""
+    out = []
+    for pair in sorted(only_ours):
+        ev = events[(events["a"] == pair[0]) & (events["b"] == pair[1])].iloc[0]
+        la, lb = _lanes_at(traj, ev["step"], pair)
+        out.append({"pair": list(pair), "found_by": "plug-in", "time_s": float(ev["time_s"]),
+                    "why": why_only_ours(la, lb, *pair)})
+    for pair in sorted(only_sumo):
+        ev = sumo[(sumo["a"] == pair[0]) & (sumo["b"] == pair[1])].iloc[0]
+        out.append({"pair": list(pair), "found_by": "SUMO", "time_s": float(ev["time_s"]),
+                    "why": f"SUMO reported a {ev['type']} on {ev['lane']} from its lane geometry; the "
+                           f"footprints (exact poses) did not overlap"})
+    return out
 
 
 class MinGap(Metric):

@@ -12,7 +12,7 @@ from sumo_avoid.core.types import EgoTask
 
 class EgoBook:
     def __init__(self, ego_ids, road, *, goal=None, goals=None, goal_tolerance_m: float, cruise_speed_mps: float,
-                 uses_goals: bool = True):
+                 uses_goals: bool = True, follow_routes: bool = True):
         self.ids = frozenset(ego_ids)
         self.road = road
         self.goal = goal  # every ego's goal: [x, y], an edge id, or None: the end of each ego's route path
@@ -20,6 +20,7 @@ class EgoBook:
         self.goal_tolerance_m = goal_tolerance_m
         self.cruise_speed_mps = cruise_speed_mps
         self.uses_goals = uses_goals
+        self.follow_routes = follow_routes  # SUMO keeps each ego on its route's lanes (not in an arena)
         self.goals: dict[str, tuple[float, float]] = {}  # ego id -> goal (x, y), m (egos with a goal)
         self.active: dict[str, EgoTask] = {}  # driven now, in take-over order
         self.tasks: dict[str, EgoTask] = {}  # every ego taken over (for the metrics)
@@ -38,6 +39,8 @@ class EgoBook:
         task = EgoTask(vid, goal, path, self.cruise_speed_mps, links, limits, lanes)
         self.active[vid] = task
         self.tasks[vid] = task
+        if self.follow_routes:
+            sim.follow_route(task)
         return task
 
     def _goal_point(self, vid: str, edges: list[str], path: np.ndarray, links) -> np.ndarray:

@@ -2,7 +2,8 @@
 
 :class:`SumoSim` starts SUMO for a scenario, reads the world once per step into an immutable
 :class:`~sumo_avoid.core.snapshot.Snapshot` (through subscriptions, not per-vehicle getters), applies
-the actuator's poses to the egos with ``moveToXY`` and advances the simulation.
+the actuator's poses to the egos with ``moveToXY`` (on their route's lanes while they drive on
+them, :mod:`sumo_avoid.sumo.placement`) and advances the simulation.
 
 SUMO runs with a fixed seed, ``--collision.check-junctions``, collisions reported but not acted on
 (``--collision.action warn``, ``--collision.mingap-factor 0`` = physical contact only), no
@@ -20,6 +21,8 @@ import libsumo
 import numpy as np
 
 from sumo_avoid.core.snapshot import Snapshot
+from sumo_avoid.core.types import EgoTask
+from sumo_avoid.sumo.placement import RoutePlacement
 from sumo_avoid.sumo.ssm import SsmRequest, equip, ssm_args
 
 _DYNAMIC = (libsumo.constants.VAR_POSITION, libsumo.constants.VAR_ANGLE, libsumo.constants.VAR_SPEED,
@@ -99,6 +102,8 @@ class SumoSim:
         libsumo.simulation.subscribe(list(_SIM_VARS))
         self._dims: dict[str, tuple[float, float]] = {}  # id -> (length, width), static
         self._egos: set[str] = set()
+        self._routes: dict[str, tuple[str, ...]] = {}  # ego -> its route as SUMO gave it at take-over
+        self._placement = RoutePlacement()
         self._static_key: tuple[str, ...] | None = None  # read(): libsumo's ids the cached static part is for
         self._static: tuple = ()
         self._subscribe_new(libsumo.vehicle.getIDList())
@@ -166,10 +171,16 @@ class SumoSim:
         libsumo.vehicle.setLaneChangeMode(vid, EGO_LANE_CHANGE_MODE)
         self._egos.add(vid)
         self._static_key = None
-        return EgoInfo(vid, tuple(libsumo.vehicle.getRoute(vid)), libsumo.vehicle.getLaneIndex(vid))
+        self._routes[vid] = tuple(libsumo.vehicle.getRoute(vid))
+        return EgoInfo(vid, self._routes[vid], libsumo.vehicle.getLaneIndex(vid))
+
+    def follow_route(self, task: EgoTask) -> None:
+        """Keep ego ``task.vid`` on its route in SUMO's view while it drives on it (:mod:`.placement`)."""
+        self._placement.follow(task, self._routes.get(task.vid, ()))
 
     def apply(self, ids, centre: np.ndarray, heading: np.ndarray, speed: np.ndarray) -> None:
-        """Place each ego exactly (off-lane allowed, also inside junctions): moveToXY keepRoute=2."""
+        """Place each ego exactly (off-lane allowed, also inside junctions) with moveToXY, mapped
+        onto its route's lane while it is on it (:class:`~sumo_avoid.sumo.placement.RoutePlacement`)."""
         if len(ids) == 0:
             return
         heading = np.asarray(heading, float)
@@ -177,15 +188,22 @@ class SumoSim:
         fx = (np.asarray(centre[:, 0], float) + half * np.cos(heading)).tolist()
         fy = (np.asarray(centre[:, 1], float) + half * np.sin(heading)).tolist()
         angle = (90.0 - np.degrees(heading)).tolist()
-        move, prev = libsumo.vehicle.moveToXY, libsumo.vehicle.setPreviousSpeed
-        for vid, x, y, a, v in zip(ids, fx, fy, angle, np.asarray(speed, float).tolist()):
-            move(vid, "", -1, x, y, angle=a, keepRoute=2)
+        move, prev, place = libsumo.vehicle.moveToXY, libsumo.vehicle.setPreviousSpeed, self._placement.place
+        for k, (vid, x, y, a, v) in enumerate(zip(ids, fx, fy, angle, np.asarray(speed, float).tolist())):
+            edge, lane, mode, route = place(vid, centre[k])
+            move(vid, edge, lane, x, y, angle=a, keepRoute=mode)
+            if route:
+                try:
+                    libsumo.vehicle.setRoute(vid, list(route))
+                except libsumo.TraCIException:
+                    self._placement.lost(vid)
             prev(vid, v)
 
     def release(self, vid: str) -> None:
         """Take a finished ego out of the simulation. Its subscription goes first: libsumo keeps the
         subscription of a vehicle removed by ``remove`` and the next step fails with "Vehicle 'x' is
         not known" (found with two egos, one at its goal while the other drives on)."""
+        self._placement.forget(vid)
         if vid in self._egos:
             self._egos.discard(vid)
             self._static_key = None
@@ -202,6 +220,7 @@ class SumoSim:
             raise SumoStepError(" ".join(str(e).split())) from None
         arrived = libsumo.simulation.getSubscriptionResults()[libsumo.constants.VAR_ARRIVED_VEHICLES_IDS]
         for vid in arrived:
+            self._placement.forget(vid)
             self._dims.pop(vid, None)
             self._egos.discard(vid)
             self._static_key = None

@@ -14,7 +14,14 @@ import sumo
 from sumo_avoid import outputs
 from sumo_avoid.core.types import FoeLink, RouteLink
 from sumo_avoid.rollout import runner
-from sumo_avoid.safety.yielding import critical_gap_s, ego_time_to_line, foe_arrival, link_state, rows_by_lane, yields
+from sumo_avoid.safety.yielding import (
+    critical_gap_s,
+    ego_time_to_line,
+    foe_arrival,
+    link_state,
+    rows_by_lane,
+    yields,
+)
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.sumo.road import Road
 
@@ -86,11 +93,15 @@ def roundabout(tmp_path_factory):
     return d
 
 
-def _run(d, rules):
+def _scenario(d, rules):
     f = d / f"rb_{rules}.toml"
     f.write_text('name = "rb"\n[sim]\nnet = "rb.net.xml"\nroutes = ["rb.rou.xml"]\nstep_s = 0.1\nduration_s = 45.0\n'
                  f'seed = 1\n[ego]\nids = ["ego"]\ncontroller = "apf_sa"\ncruise_speed_mps = 10.0\nrules = "{rules}"\n')
-    return outputs.run_metrics(runner.run(scenario.load(f)))
+    return scenario.load(f)
+
+
+def _run(d, rules):
+    return outputs.run_metrics(runner.run(_scenario(d, rules)))
 
 
 @pytest.mark.sumo
@@ -110,3 +121,18 @@ def test_without_the_rules_layer_the_ego_cuts_in_and_the_metric_says_so(roundabo
     (entry,) = m["yield_crossings"]
     assert entry["violation"] and entry["foe"] == "circ" and entry["foe_arrival_s"] < 4.5
     assert m["yield_violations"] == 1
+
+
+@pytest.mark.sumo
+def test_sumo_sees_the_waiting_ego_on_its_entry_lane_not_on_the_ring(roundabout):
+    """Placement on the route (moveToXY keepRoute=1): while the ego waits at the entry, SUMO has it
+    on the entry lane, so the circulating car is not held up by a phantom on the ring."""
+    res = runner.run(_scenario(roundabout, "traffic"))
+    t = res.traj
+    ego, circ = t[t["id"] == "ego"], t[t["id"] == "circ"]
+    waiting = ego[(ego["speed"] < 2.0) & (ego["time_s"] > 5.0) & (ego["time_s"] < 13.0)]  # slowed at the entry
+    assert len(waiting) > 5 and set(waiting["lane"]) == {"S_in_0"}
+    assert circ["speed"].min() > 3.0
+    assert [ln for ln in dict.fromkeys(ego["lane"]) if not ln.startswith(":")] == ["S_in_0", "ring_SE_0", "ring_EN_0", "N_out_0"]
+    route_edges = {p.edge for p in res.tasks["ego"].lanes}  # internal lanes of its own links included
+    assert {ln.rsplit("_", 1)[0] for ln in ego["lane"].dropna()} <= route_edges
