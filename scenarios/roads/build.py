@@ -17,7 +17,7 @@ import sys
 HERE = pathlib.Path(__file__).resolve().parent
 SRC = HERE / "src"
 sys.path.insert(0, str(HERE.parent))
-import netbuild  # noqa: E402  (scenarios/netbuild.py, shared with scenarios/generated/make.py)
+import netbuild  # (scenarios/netbuild.py, shared with scenarios/generated/make.py)
 
 NETCONVERT_OPTIONS = ["--no-internal-links", "false", "--junctions.corner-detail", "5", "--no-turnarounds", "true",
                       "--offset.disable-normalization", "true", "--output.street-names", "false"]
