@@ -27,8 +27,8 @@ def names() -> list[str]:
     return sorted({p.name.split(".")[0] for p in SRC.iterdir() if p.name.endswith((".nod.xml", ".netgcfg"))})
 
 
-def build(name: str) -> pathlib.Path:
-    out = HERE / f"{name}.net.xml"
+def build(name: str, out_dir: pathlib.Path = HERE) -> pathlib.Path:
+    out = pathlib.Path(out_dir).resolve() / f"{name}.net.xml"
     cfg = SRC / f"{name}.netgcfg"
     if cfg.exists():
         netbuild.run("netgenerate", ["-c", cfg.name, "--output-file", out], cwd=SRC)
