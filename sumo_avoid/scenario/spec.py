@@ -25,6 +25,7 @@ from sumo_avoid.metrics import METRICS
 from sumo_avoid.safety import LAYERS, RULES
 from sumo_avoid.safety.danger_time import DangerTimeParams
 from sumo_avoid.safety.rules import RulesParams
+from sumo_avoid.scenario.obstacles import RandomObstaclesConfig, draw
 from sumo_avoid.sensing import SENSORS
 from sumo_avoid.sensing.radar import RadarParams
 from sumo_avoid.sumo.road import Road
@@ -93,12 +94,18 @@ class ArenaConfig:
     length_m: float = field_doc(4.0, doc="vehicle length, m")
     width_m: float = field_doc(1.8, doc="vehicle width, m")
     id_prefix: str = field_doc("f", doc="vehicle ids are PREFIX0 .. PREFIX(N-1)")
+    starts: tuple[tuple[float, ...], ...] = field_doc((), signed=True, doc="[[x, y], ...] fixed start centres, one "
+                                                                           "per agent, m (default: random)")
+    start_heading_deg: float = field_doc(0.0, signed=True, doc="with starts: every agent's initial heading, deg CCW "
+                                                               "from +x")
 
     def __post_init__(self):
         if len(self.origin) != 2:
             raise ValueError("arena.origin = [x, y]")
         if self.size_m <= 0 or self.n_agents < 1:
             raise ValueError("arena.size_m > 0 and arena.n_agents >= 1")
+        if self.starts and (len(self.starts) != self.n_agents or any(len(p) != 2 for p in self.starts)):
+            raise FieldError("starts", f"{self.n_agents} points [x, y] (one per agent)", [list(p) for p in self.starts])
 
     @property
     def ids(self) -> tuple[str, ...]:
@@ -143,6 +150,8 @@ class ScenarioSpec:
     rules: RulesParams = field_doc(RulesParams(), doc="[rules] table: traffic rules layer (SPEC §5)")
     arena: ArenaConfig | None = field_doc(None, doc="[arena] table: spawn a flock in a square arena (flocking)")
     obstacles: tuple[ObstacleConfig, ...] = field_doc((), doc="[[obstacles]] static convex polygons (id, shape)")
+    random_obstacles: RandomObstaclesConfig | None = field_doc(
+        None, doc="[random_obstacles] table: static obstacles drawn from the seed, added to [[obstacles]]")
 
     def __post_init__(self):
         if not self.ego.ids and self.arena is None:
@@ -222,6 +231,8 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     if seed is not None:
         data.setdefault("sim", {})["seed"] = seed
     spec = build(ScenarioSpec, data, file)
+    if spec.random_obstacles is not None:
+        spec = _with_random_obstacles(spec, file)
     for key, value, names in (("ego.controller", spec.ego.controller, CONTROLLERS.names()),
                               ("ego.sensor", spec.ego.sensor, SENSORS.names()),
                               ("ego.safety", spec.ego.safety, ["none", *LAYERS.names()]),
@@ -253,6 +264,17 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     return Scenario(spec, path, net, routes, adds, params)
 
 
+def _with_random_obstacles(spec: ScenarioSpec, file: str) -> ScenarioSpec:
+    """The spec with the seed's random obstacles appended to ``obstacles`` (scenario/obstacles.py)."""
+    cfg = spec.random_obstacles
+    try:
+        polys = draw(cfg, spec.sim.seed)
+    except ValueError as e:
+        raise ScenarioError(file, "random_obstacles.count", f"obstacles that fit the region ({e})", cfg.count) from None
+    drawn = tuple(ObstacleConfig(f"{cfg.id_prefix}{k}", tuple(map(tuple, pg.tolist()))) for k, pg in enumerate(polys))
+    return replace(spec, obstacles=spec.obstacles + drawn)
+
+
 def _check_goals(spec: ScenarioSpec, net: pathlib.Path, file: str) -> None:
     """Per-ego goals name egos; a point goal lies on the drivable area; an edge goal is a normal
     edge of the net (whether it is on the ego's route is known when SUMO has routed the ego)."""
@@ -267,6 +289,11 @@ def _check_goals(spec: ScenarioSpec, net: pathlib.Path, file: str) -> None:
             st = net.stat()
             if goal not in _edges_in(str(net), st.st_mtime_ns, st.st_size):
                 raise ScenarioError(file, key, f"an edge id of the network {spec.sim.net}", goal)
+        elif goal is not None and spec.arena is not None:  # an open field: the goal lies inside the walls
+            (x0, y0), size = spec.arena.origin, spec.arena.size_m
+            if not (x0 <= goal[0] <= x0 + size and y0 <= goal[1] <= y0 + size):
+                raise ScenarioError(file, key, f"a point inside the arena [{x0}, {x0 + size}] x [{y0}, {y0 + size}]",
+                                    list(goal))
         elif goal is not None:
             try:
                 road = Road.from_net_file(net)
