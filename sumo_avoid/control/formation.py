@@ -26,11 +26,14 @@ goal-aware repulsion (towards its own goal) + repulsion from the other members, 
 one vehicle width; the members' current spread would make gamma self-referential: narrowing the
 shape raises W_max / W back to 1 and the mode chatters); W_max = the
 free width across it left by the obstacles the leader knows within [-depth, ``lookahead_m``]
-along it (:func:`.formation_field.free_width`, centred on the leader's line); gamma = W_max / W.
+along it (depth: the formation's, nominal or as strung out now, times ``behind``) (:func:`.formation_field.free_width`, centred on the leader's line); gamma = W_max / W.
 kappa = 1 keeps the shape, kappa = 2 scales it laterally so it fits W_max with ``clear_m`` each
 side, kappa = 3 (gamma <= gamma_min, from the smallest lateral scale at which neighbours keep
-``safe_gap_m``) breaks it up: followers keep only a weak pull (``k_slot_broken_ps``) to their
-unscaled slots and avoid on their own, re-forming when gamma recovers. A higher kappa is taken at
+``safe_gap_m``) breaks it up: each follower avoids on its own, with its own repulsion from the
+obstacles and the other members, and only a weak pull (``k_slot_broken_ps``) towards its nominal
+slot (``broken = "slots"``) or towards the leader's trail, follower j of the slot order aiming at
+the point j x ``spacing_m`` behind the leader on the path the leader took (``"trail"``); the
+shape re-forms when gamma recovers. A higher kappa is taken at
 once, a lower one only after it held for ``relax_s``; the lateral scale widens at most at
 ``widen_rate_ps``.
 
@@ -82,7 +85,8 @@ class FormationParams:
                                                              "heading (a car turns while it moves), deg")
     slow_radius_m: float = field_doc(6.0, positive=True, doc="the leader slows down within this distance of the goal, m")
     k_slot_ps: float = field_doc(0.3, positive=True, doc="followers' slot gain (kappa 1, 2), 1/s")
-    k_slot_broken_ps: float = field_doc(0.15, positive=True, doc="followers' slot gain when broken up (kappa 3), 1/s")
+    k_slot_broken_ps: float = field_doc(0.15, positive=True, doc="followers' gain to their trail point when broken up "
+                                                                "(kappa 3), 1/s")
     k_member: float = field_doc(4.0, positive=True, doc="member-member repulsion gain, m^3/s")
     rho0_member_m: float = field_doc(3.0, positive=True, doc="member-member influence distance (footprint gap), m")
     frame_tau_s: float = field_doc(2.0, positive=True, doc="low-pass time constant of the formation frame's heading, s")
@@ -95,6 +99,10 @@ class FormationParams:
     safe_gap_m: float = field_doc(1.0, doc="gamma_min: sideways gap neighbours keep, m")
     relax_s: float = field_doc(2.0, doc="a lower kappa is taken only after it held this long, s")
     widen_rate_ps: float = field_doc(0.1, positive=True, doc="the lateral scale grows at most this fast, 1/s")
+    broken: str = field_doc("slots", doc="kappa 3: 'slots' (weak pull to the nominal slots, each avoids on its "
+                                         "own) or 'trail' (each follows the leader's path)")
+    behind: float = field_doc(1.0, doc="W_max also counts obstacles beside the formation's rows: this fraction "
+                                       "of its depth behind the leader, 1")
     sense_radius_m: float = field_doc(40.0, positive=True, doc="truth: the leader knows obstacles within this range, m")
     v2v_gate_m: float = field_doc(4.0, positive=True, doc="radar: a return this close to a member's V2V position "
                                                           "is that member and is dropped, m")
@@ -103,6 +111,8 @@ class FormationParams:
     vel_noise_mps: float = field_doc(0.0, doc="V2V: std of Gaussian noise on members' velocities, m/s")
 
     def __post_init__(self):
+        if self.broken not in ("slots", "trail"):
+            raise FieldError("broken", "'slots' or 'trail'", self.broken)
         if self.shape not in ff.SHAPES:
             raise FieldError("shape", f"one of {list(ff.SHAPES)}", self.shape)
         for k in ("alpha", "beta"):
@@ -156,6 +166,7 @@ class FormationController:
         self.kappa, self.scale, self._lower_since = 1, 1.0, None
         self.kappa_steps = [0, 0, 0]
         self.log: list[list[float]] = []  # [time_s, kappa] at every change
+        self.trail = np.zeros((0, 3))  # the leader's path: x, y, arc length s (a point every 0.5 m)
         self.gamma_min_seen = np.inf
         self.last = {}  # the last step's gamma, W, W_max, gamma_min (tests, plots)
 
@@ -243,17 +254,17 @@ class FormationController:
         return np.column_stack([np.bincount(i, f[:, 0], E), np.bincount(i, f[:, 1], E)])
 
     # --- mode --------------------------------------------------------------------------------------
-    def _mode(self, lead_pos, goal, polys, lead_only, rel_lat, length, width, t) -> None:
+    def _mode(self, lead_pos, goal, polys, lead_only, rel_lon, rel_lat, length, width, t) -> None:
         p = self.p
         c, s = np.cos(self.frame), np.sin(self.frame)
         span = float(np.ptp(self.offsets[:, 1]))
         W = ff.formation_width(self.offsets[:, 1], width)  # the nominal shape's: see the module doc
-        depth = float(-self.offsets[:, 0].min()) + 0.5 * length
+        depth = max(float(-self.offsets[:, 0].min()), float(-rel_lon.min())) + 0.5 * length  # nominal or strung out
         ahead = min(p.lookahead_m, float(np.hypot(*(goal - lead_pos))))
         if len(polys) and lead_only.any():
             rel = polys[lead_only] - lead_pos
             x, y = rel[..., 0] * c + rel[..., 1] * s, -rel[..., 0] * s + rel[..., 1] * c
-            keep = (x.max(axis=1) >= -depth) & (x.min(axis=1) <= ahead)
+            keep = (x.max(axis=1) >= -depth * p.behind) & (x.min(axis=1) <= ahead)
             iv = np.column_stack([y.min(axis=1), y.max(axis=1)])[keep]
         else:
             iv = np.zeros((0, 2))
@@ -278,6 +289,22 @@ class FormationController:
         self.gamma_min_seen = min(self.gamma_min_seen, gamma)
         self.last = {"gamma": gamma, "W": W, "W_now": ff.formation_width(rel_lat, width), "W_max": W_max,
                      "gamma_min": g_min, "kappa": self.kappa}
+
+    # --- the leader's trail (kappa 3) ---------------------------------------------------------------
+    def _extend_trail(self, pos) -> None:
+        if not len(self.trail):
+            self.trail = np.array([[pos[0], pos[1], 0.0]])
+            return
+        d = float(np.hypot(*(pos - self.trail[-1, :2])))
+        if d >= 0.5:
+            self.trail = np.vstack([self.trail, [pos[0], pos[1], self.trail[-1, 2] + d]])
+
+    def _trail_points(self, back_m) -> np.ndarray:
+        """(E, 2) points of the trail ``back_m`` (E,) metres behind its newest point (its first
+        point if the trail is shorter)."""
+        s = np.maximum(self.trail[-1, 2] - np.asarray(back_m, float), 0.0)
+        return np.column_stack([np.interp(s, self.trail[:, 2], self.trail[:, 0]),
+                                np.interp(s, self.trail[:, 2], self.trail[:, 1])])
 
     # --- one step ----------------------------------------------------------------------------------
     def act(self, obs: Observation) -> np.ndarray:
@@ -310,10 +337,14 @@ class FormationController:
         k_slot = np.array([slot_of[v] for v in ids])
         c, s = np.cos(self.frame), np.sin(self.frame)
         rel = own_pos - own_pos[lk]
-        self._mode(own_pos[lk], goals[lk], polys, lead_only, -rel[:, 0] * s + rel[:, 1] * c,
+        self._mode(own_pos[lk], goals[lk], polys, lead_only, rel[:, 0] * c + rel[:, 1] * s, -rel[:, 0] * s + rel[:, 1] * c,
                    float(length[lk]), float(width[lk]), snap.time_s)
         scale = self.scale if self.kappa == 2 else 1.0
-        slot_pos = ff.to_world(self.offsets[k_slot], nb_pos[lk], self.frame, scale)
+        self._extend_trail(nb_pos[lk])
+        if self.kappa == 3 and p.broken == "trail":
+            slot_pos = self._trail_points(k_slot * p.spacing_m)
+        else:
+            slot_pos = ff.to_world(self.offsets[k_slot], nb_pos[lk], self.frame, scale)
         err = slot_pos - own_pos
         fol = np.arange(len(ids)) != lk
         e_rms = float(np.sqrt((err[fol] ** 2).sum(axis=1).mean())) if fol.any() else 0.0

@@ -123,8 +123,9 @@ def free_width(intervals: np.ndarray, half_window_m: float) -> float:
     formation frame, (K, 2)) that obstacles ahead occupy, within [-half_window, +half_window].
 
     The free gaps are the complement of the intervals within the window. If the leader's line
-    (y = 0) lies in a gap, W_max is that gap's width; if an obstacle covers y = 0 the leader's
-    field takes it round one side, and W_max is the wider of the two gaps next to the obstacles
+    (y = 0) lies in a gap [lo, hi], W_max = 2 min(-lo, hi): the width free *centred on the leader*,
+    since the shape is held about the leader; if an obstacle covers y = 0 the leader's field takes
+    it round one side, and W_max is the width of the wider of the two gaps next to the obstacles
     covering it. With nothing ahead W_max = 2 half_window."""
     lo_w, hi_w = -float(half_window_m), float(half_window_m)
     iv = np.asarray(intervals, float).reshape(-1, 2)
@@ -142,7 +143,8 @@ def free_width(intervals: np.ndarray, half_window_m: float) -> float:
     widths = np.maximum(edges[:, 1] - edges[:, 0], 0.0)
     inside = np.flatnonzero((edges[:, 0] <= 0.0) & (edges[:, 1] >= 0.0))
     if len(inside):
-        return float(widths[inside].max())
+        lo, hi = edges[inside[0]]
+        return float(2.0 * min(-lo, hi))
     blocked = next(i for i, (a, b) in enumerate(merged) if a <= 0.0 <= b)  # merged block i: gaps i, i + 1
     return float(max(widths[blocked], widths[blocked + 1]))
 

@@ -51,6 +51,12 @@ def draw(cfg: RandomObstaclesConfig, seed: int, max_tries: int = 100_000) -> lis
     (deterministic for a seed). Raises ValueError if they do not fit in ``max_tries`` draws."""
     rng = np.random.default_rng([seed, STREAM])
     x0, y0, x1, y1 = cfg.region
+    # disks of radius r_min + gap/2 cannot cover more than pi / sqrt(12) (hexagonal packing) of the
+    # region grown by that radius: past that no draw can succeed
+    r = cfg.radius_min_m + 0.5 * cfg.min_gap_m
+    if cfg.count * np.pi * r**2 > np.pi / np.sqrt(12.0) * (x1 - x0 + 2 * r) * (y1 - y0 + 2 * r):
+        raise ValueError(f"{cfg.count} obstacles of radius >= {cfg.radius_min_m} m, {cfg.min_gap_m} m apart, "
+                         "cannot fit the region")
     clear = np.asarray(cfg.keep_clear, float).reshape(-1, 2)
     centres, radii, out = [], [], []
     tries = 0
