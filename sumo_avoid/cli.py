@@ -17,8 +17,8 @@ from sumo_avoid.control import CONTROLLERS
 from sumo_avoid.core.config import ScenarioError
 from sumo_avoid.rollout import runner
 from sumo_avoid.scenario import spec as scenario
-from sumo_avoid.scenario.spec import format_reference
-from sumo_avoid.studies import batch, report, reproduce, suite
+from sumo_avoid.scenario.reference import format_reference
+from sumo_avoid.studies import batch, report, reproduce, suite, tune
 from sumo_avoid.sumo import console
 
 EXIT_BAD_INPUT = 2
@@ -38,7 +38,7 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     sub.add_parser("controllers", help="list the controllers")
     sub.add_parser("keys", help="print every scenario key (Markdown table)")
-    for mod in (batch, suite, report, reproduce):
+    for mod in (batch, suite, report, reproduce, tune):
         mod.add_parser(sub)
     return ap
 
@@ -85,7 +85,7 @@ def main(argv=None) -> int:
     try:
         if args.command == "run":
             return cmd_run(args)
-        if getattr(args, "func", None) is not None:  # batch, suite, report
+        if getattr(args, "func", None) is not None:  # batch, suite, report, reproduce, tune
             return args.func(args)
         if args.command == "controllers":
             for entry in CONTROLLERS.entries():

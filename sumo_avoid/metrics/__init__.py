@@ -4,6 +4,7 @@ from sumo_avoid.core.registry import Registry
 from sumo_avoid.metrics.base import clean
 from sumo_avoid.metrics.comfort import Comfort
 from sumo_avoid.metrics.flocking import FlockingOrder
+from sumo_avoid.metrics.formation import FormationScore
 from sumo_avoid.metrics.road_use import RoadUse
 from sumo_avoid.metrics.rules import RuleViolations
 from sumo_avoid.metrics.ssm import SurrogateSafety
@@ -27,6 +28,7 @@ METRICS.register("phi_wall", PhiWall)
 METRICS.register("plugin_stats", PluginStats)
 METRICS.register("motion", Motion)
 METRICS.register("flocking", FlockingOrder)
+METRICS.register("formation", FormationScore)
 METRICS.register("rules", RuleViolations)
 METRICS.register("road_use", RoadUse)
 METRICS.register("comfort", Comfort)

@@ -81,14 +81,18 @@ class StaticObstacles:
 
 
 class ArenaSpawn:
-    """Set-up hook: the flock placed at random in the arena (own random stream), random headings."""
+    """Set-up hook: the flock placed at random in the arena (own random stream), random headings; or
+    at the arena's fixed ``starts`` with one heading."""
 
     def __init__(self, arena, walls, obstacles, rng: np.random.Generator):
         self.arena, self.walls, self.obstacles, self.rng = arena, walls, obstacles, rng
 
     def setup(self, sim) -> None:
         a = self.arena
-        start = random_positions(self.rng, a.n_agents, self.walls, self.obstacles, min_spacing_m=a.min_spacing_m,
-                                 margin_m=a.margin_m)
-        heading0 = self.rng.uniform(-np.pi, np.pi, a.n_agents)
+        if a.starts:  # fixed starts (a formation), one heading: no random draws
+            start, heading0 = np.asarray(a.starts, float), np.full(a.n_agents, np.radians(a.start_heading_deg))
+        else:
+            start = random_positions(self.rng, a.n_agents, self.walls, self.obstacles, min_spacing_m=a.min_spacing_m,
+                                     margin_m=a.margin_m)
+            heading0 = self.rng.uniform(-np.pi, np.pi, a.n_agents)
         sim.add_free_vehicles(a.ids, start, heading0, a.initial_speed_mps, a.length_m, a.width_m)

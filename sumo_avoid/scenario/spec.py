@@ -3,7 +3,7 @@
 A scenario names a SUMO network, SUMO route files (vehicle types, vehicles, flows), which of
 those vehicles the plug-in drives (the egos), their controller and its parameters, the actuator
 limits and the output options. ``docs/scenario_format.md`` lists every key (generated from the
-dataclasses below by ``python -m sumo_avoid.scenario.spec``).
+dataclasses below by ``python -m sumo_avoid.scenario.reference``).
 """
 from __future__ import annotations
 
@@ -20,11 +20,12 @@ import numpy as np
 from sumo_avoid.actuation import ACTUATORS
 from sumo_avoid.actuation.params import ActuatorConfig
 from sumo_avoid.control import CONTROLLERS
-from sumo_avoid.core.config import FieldError, ScenarioError, build, describe, field_doc
+from sumo_avoid.core.config import FieldError, ScenarioError, build, field_doc
 from sumo_avoid.metrics import METRICS
 from sumo_avoid.safety import LAYERS, RULES
 from sumo_avoid.safety.danger_time import DangerTimeParams
 from sumo_avoid.safety.rules import RulesParams
+from sumo_avoid.scenario.obstacles import RandomObstaclesConfig, draw
 from sumo_avoid.sensing import SENSORS
 from sumo_avoid.sensing.radar import RadarParams
 from sumo_avoid.sumo.road import Road
@@ -93,12 +94,18 @@ class ArenaConfig:
     length_m: float = field_doc(4.0, doc="vehicle length, m")
     width_m: float = field_doc(1.8, doc="vehicle width, m")
     id_prefix: str = field_doc("f", doc="vehicle ids are PREFIX0 .. PREFIX(N-1)")
+    starts: tuple[tuple[float, ...], ...] = field_doc((), signed=True, doc="[[x, y], ...] fixed start centres, one "
+                                                                           "per agent, m (default: random)")
+    start_heading_deg: float = field_doc(0.0, signed=True, doc="with starts: every agent's initial heading, deg CCW "
+                                                               "from +x")
 
     def __post_init__(self):
         if len(self.origin) != 2:
             raise ValueError("arena.origin = [x, y]")
         if self.size_m <= 0 or self.n_agents < 1:
             raise ValueError("arena.size_m > 0 and arena.n_agents >= 1")
+        if self.starts and (len(self.starts) != self.n_agents or any(len(p) != 2 for p in self.starts)):
+            raise FieldError("starts", f"{self.n_agents} points [x, y] (one per agent)", [list(p) for p in self.starts])
 
     @property
     def ids(self) -> tuple[str, ...]:
@@ -143,6 +150,8 @@ class ScenarioSpec:
     rules: RulesParams = field_doc(RulesParams(), doc="[rules] table: traffic rules layer (SPEC §5)")
     arena: ArenaConfig | None = field_doc(None, doc="[arena] table: spawn a flock in a square arena (flocking)")
     obstacles: tuple[ObstacleConfig, ...] = field_doc((), doc="[[obstacles]] static convex polygons (id, shape)")
+    random_obstacles: RandomObstaclesConfig | None = field_doc(
+        None, doc="[random_obstacles] table: static obstacles drawn from the seed, added to [[obstacles]]")
 
     def __post_init__(self):
         if not self.ego.ids and self.arena is None:
@@ -222,6 +231,8 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     if seed is not None:
         data.setdefault("sim", {})["seed"] = seed
     spec = build(ScenarioSpec, data, file)
+    if spec.random_obstacles is not None:
+        spec = _with_random_obstacles(spec, file)
     for key, value, names in (("ego.controller", spec.ego.controller, CONTROLLERS.names()),
                               ("ego.sensor", spec.ego.sensor, SENSORS.names()),
                               ("ego.safety", spec.ego.safety, ["none", *LAYERS.names()]),
@@ -253,6 +264,17 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     return Scenario(spec, path, net, routes, adds, params)
 
 
+def _with_random_obstacles(spec: ScenarioSpec, file: str) -> ScenarioSpec:
+    """The spec with the seed's random obstacles appended to ``obstacles`` (scenario/obstacles.py)."""
+    cfg = spec.random_obstacles
+    try:
+        polys = draw(cfg, spec.sim.seed)
+    except ValueError as e:
+        raise ScenarioError(file, "random_obstacles.count", f"obstacles that fit the region ({e})", cfg.count) from None
+    drawn = tuple(ObstacleConfig(f"{cfg.id_prefix}{k}", tuple(map(tuple, pg.tolist()))) for k, pg in enumerate(polys))
+    return replace(spec, obstacles=spec.obstacles + drawn)
+
+
 def _check_goals(spec: ScenarioSpec, net: pathlib.Path, file: str) -> None:
     """Per-ego goals name egos; a point goal lies on the drivable area; an edge goal is a normal
     edge of the net (whether it is on the ego's route is known when SUMO has routed the ego)."""
@@ -267,6 +289,11 @@ def _check_goals(spec: ScenarioSpec, net: pathlib.Path, file: str) -> None:
             st = net.stat()
             if goal not in _edges_in(str(net), st.st_mtime_ns, st.st_size):
                 raise ScenarioError(file, key, f"an edge id of the network {spec.sim.net}", goal)
+        elif goal is not None and spec.arena is not None:  # an open field: the goal lies inside the walls
+            (x0, y0), size = spec.arena.origin, spec.arena.size_m
+            if not (x0 <= goal[0] <= x0 + size and y0 <= goal[1] <= y0 + size):
+                raise ScenarioError(file, key, f"a point inside the arena [{x0}, {x0 + size}] x [{y0}, {y0 + size}]",
+                                    list(goal))
         elif goal is not None:
             try:
                 road = Road.from_net_file(net)
@@ -357,39 +384,3 @@ def _check_ego_ids(ego_ids, files, file: str) -> None:
 
 def with_spec(scn: Scenario, **changes) -> Scenario:
     return replace(scn, spec=replace(scn.spec, **changes))
-
-
-def format_reference() -> str:
-    """Markdown table of every scenario key (for docs/scenario_format.md)."""
-    lines = ["# Scenario file format", "",
-             "Generated by `sumo-avoid keys` from the config dataclasses (tests/test_docs.py keeps it in sync).",
-             "A scenario is a TOML file; paths are relative to it. Top-level keys, then one table per",
-             "section; `[controllers.NAME]` holds the parameters of controller NAME (only the chosen",
-             "controller's table is used, every table is validated). Any key can be overridden from the",
-             "command line with `--set dotted.key=VALUE` (VALUE is read as TOML).", "",
-             "**Goals.** By default each ego's goal is the end of its route. `ego.goal` sets every ego's goal,",
-             "`[ego.goals]` one ego's (it wins over `ego.goal`); each is a point `[x, y]` or an edge id, meaning",
-             "the point where the ego's reference path leaves that edge (the stop line at the junction after it;",
-             "the route's end if it is the route's last edge):", "",
-             "```toml", "[ego]", 'ids = ["ego", "ego2", "flow.0"]', 'goal = "C2W"             # every ego: where its route leaves C2W',
-             "", "[ego.goals]", "ego2 = [-120.0, 1.6]      # but ego2: this point",
-             '"flow.0" = "S2C"          # ids with dots are quoted', "```", "",
-             "A point must lie on the drivable area and an edge must be a normal edge of the net (checked on",
-             "load); an edge must also be on the route SUMO gives that ego (trips are routed when they depart:",
-             "checked then). An ego that never departs within `sim.duration_s` (a later depart time, or a",
-             "vehicle SUMO could not insert) is an error as well. Such errors found while running stop the run:",
-             "`sumo-avoid run` prints one line naming the file and key and exits with code 2, writing nothing;",
-             "in a batch the run is recorded failed with that line.", "",
-             "| key | type | default | meaning |", "|---|---|---|---|"]
-    for key, tp, default, doc in describe(ScenarioSpec):
-        if key == "controllers":
-            continue
-        lines.append(f"| `{key}` | {tp} | `{default}` | {doc} |")
-    for entry in CONTROLLERS.entries():
-        for key, tp, default, doc in describe(entry.params, f"controllers.{entry.name}"):
-            lines.append(f"| `{key}` | {tp} | `{default}` | {doc} |")
-    return "\n".join(lines)
-
-
-if __name__ == "__main__":  # pragma: no cover
-    print(format_reference())

@@ -1,0 +1,357 @@
+"""``formation``: leader-follower formation of connected vehicles (SPEC §3, seed 003).
+
+The **leader** (the first of ``members``) drives to its goal along the goal-aware potential field
+of SPEC §3 (:mod:`.formation_field`):
+
+    F = eta_at rho_g g  +  reshape_{alpha, beta}( sum over obstacles of F_re1 + F_re2 )
+
+with rho_g its distance to the goal, g the unit vector to it, F_re1 = eta_re (1/rho - 1/rho0)
+rho_g^n / rho^2 away from the obstacle, F_re2 = (n/2) eta_re (1/rho - 1/rho0)^2 rho_g^(n-1)
+towards the goal (rho = footprint-to-obstacle distance, floored at ``rho_floor_m``), and the
+vehicle-frame reshaping F_p' = (1 + alpha) F_p, F_q' = F_q + beta |F_re| that slides the
+resultant round an obstacle. It moves along F at ``leader_speed_mps`` (the seed's constant speed),
+slowing within ``slow_radius_m`` of the goal and while the followers lag behind their slots.
+Values used (documented in docs/formation.md): n = 1 (the repulsion scales with rho_g like the
+attraction, so their balance does not drift with the distance to the goal, and it vanishes at the
+goal), alpha = -0.3 (30 % less head-on push), beta = +0.3 (a push to the left of 30 % of |F_re|).
+
+**Followers** hold slots of a shape (:func:`.formation_field.slots`) in the formation frame: at
+the leader's position, turned by the leader's heading low-passed with ``frame_tau_s`` (the
+low-pass slowed in proportion to the leader's speed: a creeping leader does not swing the frame). Each
+follower's command is the leader's velocity (over V2V) + ``k_slot_ps`` x slot error + the same
+goal-aware repulsion (towards its own goal) + repulsion from the other members, capped at
+``follower_max_speed_mps``.
+
+**Mode** (SPEC §3): W = the nominal shape's width across the formation frame (its outer slots' spread +
+one vehicle width; the members' current spread would make gamma self-referential: narrowing the
+shape raises W_max / W back to 1 and the mode chatters); W_max = the
+free width across it left by the obstacles the leader knows within [-depth, ``lookahead_m``]
+along it (depth: the formation's, nominal or as strung out now, times ``behind``) (:func:`.formation_field.free_width`, centred on the leader's line); gamma = W_max / W.
+kappa = 1 keeps the shape, kappa = 2 scales it laterally so it fits W_max with ``clear_m`` each
+side, kappa = 3 (gamma <= gamma_min, from the smallest lateral scale at which neighbours keep
+``safe_gap_m``) breaks it up: each follower avoids on its own, with its own repulsion from the
+obstacles and the other members, and only a weak pull (``k_slot_broken_ps``) towards its nominal
+slot (``broken = "slots"``) or towards the leader's trail, follower j of the slot order aiming at
+the point j x ``spacing_m`` behind the leader on the path the leader took (``"trail"``); the
+shape re-forms when gamma recovers. A higher kappa is taken at
+once, a lower one only after it held for ``relax_s``; the lateral scale widens at most at
+``widen_rate_ps``.
+
+Sensing: the leader's obstacle list is the static obstacles and the other (non-member) vehicles
+within ``sense_radius_m`` (``ego.sensor = "truth"``), or its own radar returns as assumed boxes
+(``"radar"``, returns near a member's V2V position dropped). Followers get the leader's list and the
+members' states over V2V (Needs(v2v=True): delay and noise of the ``[controllers.formation]``
+keys); with radar each follower adds its own returns. When the leader has reached its goal (and
+left), each follower drives the leader's field to its own goal.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from sumo_avoid.control import formation_field as ff
+from sumo_avoid.core.config import FieldError, field_doc
+from sumo_avoid.core.geometry import (
+    convex_distance,
+    footprint_corners,
+    pad_polygons,
+    wrap_angle,
+)
+from sumo_avoid.core.types import EgoTask, Needs, Observation
+from sumo_avoid.sensing.perception import radar_obstacles
+from sumo_avoid.sensing.v2v import V2VParams
+
+
+@dataclass(frozen=True)
+class FormationParams:
+    shape: str = field_doc("triangle", doc="formation shape: triangle, line, column, v, diamond")
+    spacing_m: float = field_doc(8.0, positive=True, doc="slot spacing (the seed's unit, scaled), m")
+    apex_deg: float = field_doc(90.0, positive=True, doc="triangle / v apex angle at the leader, deg (90 = the seed's "
+                                                         "coordinates; its '45 deg' is each side's angle to the heading)")
+    members: tuple[str, ...] = field_doc((), doc="ego ids in slot order, leader first (default: the egos' ids in "
+                                                 "natural order, e.g. f0, f1, ..., f10)")
+    leader_speed_mps: float = field_doc(1.2, positive=True, doc="leader's speed (seed: 0.15 m/s, x 8 scale), m/s")
+    follower_max_speed_mps: float = field_doc(3.0, positive=True, doc="followers' speed cap, m/s")
+    eta_at: float = field_doc(0.02, positive=True, doc="attraction gain eta_at, 1/s")
+    eta_re: float = field_doc(0.2, positive=True, doc="repulsion gain eta_re, m^(3-n)/s")
+    n_goal: float = field_doc(1.0, positive=True, doc="exponent n of the goal-aware factor rho_g^n, 1")
+    rho0_m: float = field_doc(10.0, positive=True, doc="obstacle influence distance rho0, m")
+    rho_floor_m: float = field_doc(0.3, positive=True, doc="obstacle distance floor in the field, m")
+    alpha: float = field_doc(-0.3, signed=True, doc="reshaping along the heading, F_p' = (1 + alpha) F_p, in (-1, 1)")
+    beta: float = field_doc(0.3, signed=True, doc="reshaping across, F_q' = F_q + beta |F_re|, in (-1, 1)")
+    max_turn_deg: float = field_doc(75.0, positive=True, doc="the leader's command stays within this angle of its "
+                                                             "heading (a car turns while it moves), deg")
+    slow_radius_m: float = field_doc(6.0, positive=True, doc="the leader slows down within this distance of the goal, m")
+    k_slot_ps: float = field_doc(0.3, positive=True, doc="followers' slot gain (kappa 1, 2), 1/s")
+    k_slot_broken_ps: float = field_doc(0.15, positive=True, doc="followers' gain to their trail point when broken up "
+                                                                "(kappa 3), 1/s")
+    k_member: float = field_doc(4.0, positive=True, doc="member-member repulsion gain, m^3/s")
+    rho0_member_m: float = field_doc(3.0, positive=True, doc="member-member influence distance (footprint gap), m")
+    frame_tau_s: float = field_doc(2.0, positive=True, doc="low-pass time constant of the formation frame's heading, s")
+    wait_gain_pm: float = field_doc(0.1, doc="leader slows by this per metre of followers' RMS slot error, 1/m")
+    wait_free_m: float = field_doc(2.0, doc="... beyond this RMS slot error, m")
+    wait_min: float = field_doc(0.3, positive=True, doc="... down to this fraction of its speed, 1")
+    lookahead_m: float = field_doc(25.0, positive=True, doc="W_max: obstacles up to this far ahead of the leader, m")
+    window_m: float = field_doc(30.0, positive=True, doc="W_max: half width of the window across the heading, m")
+    clear_m: float = field_doc(1.0, doc="kappa 2: clearance kept to the obstacles on each side, m")
+    safe_gap_m: float = field_doc(1.0, doc="gamma_min: sideways gap neighbours keep, m")
+    relax_s: float = field_doc(2.0, doc="a lower kappa is taken only after it held this long, s")
+    widen_rate_ps: float = field_doc(0.1, positive=True, doc="the lateral scale grows at most this fast, 1/s")
+    broken: str = field_doc("slots", doc="kappa 3: 'slots' (weak pull to the nominal slots, each avoids on its "
+                                         "own) or 'trail' (each follows the leader's path)")
+    behind: float = field_doc(1.0, doc="W_max also counts obstacles beside the formation's rows: this fraction "
+                                       "of its depth behind the leader, 1")
+    sense_radius_m: float = field_doc(40.0, positive=True, doc="truth: the leader knows obstacles within this range, m")
+    v2v_gate_m: float = field_doc(4.0, positive=True, doc="radar: a return this close to a member's V2V position "
+                                                          "is that member and is dropped, m")
+    delay_s: float = field_doc(0.0, doc="V2V: members' states arrive this late, s")
+    pos_noise_m: float = field_doc(0.0, doc="V2V: std of Gaussian noise on members' positions, m")
+    vel_noise_mps: float = field_doc(0.0, doc="V2V: std of Gaussian noise on members' velocities, m/s")
+
+    def __post_init__(self):
+        if self.broken not in ("slots", "trail"):
+            raise FieldError("broken", "'slots' or 'trail'", self.broken)
+        if self.shape not in ff.SHAPES:
+            raise FieldError("shape", f"one of {list(ff.SHAPES)}", self.shape)
+        for k in ("alpha", "beta"):
+            if not -1.0 < getattr(self, k) < 1.0:
+                raise FieldError(k, "a number in (-1, 1)", getattr(self, k))
+
+
+def natural_key(vid: str):
+    """Sort key: digits as numbers (f2 before f10)."""
+    return [int(t) if t.isdigit() else t for t in re.split(r"(\d+)", vid)]
+
+
+def member_order(params: FormationParams, ego_ids) -> list[str]:
+    """Slot order of the formation: ``members`` if given, else the ids in natural order."""
+    return list(params.members) if params.members else sorted(ego_ids, key=natural_key)
+
+
+def _unit(v):
+    n = np.hypot(v[..., 0], v[..., 1])
+    return np.where((n > 1e-12)[..., None], v / np.maximum(n, 1e-12)[..., None], 0.0), n
+
+
+def forward_cone(v, heading: float, max_turn: float) -> np.ndarray:
+    """A car cannot turn on the spot: a command more than ``max_turn`` (rad) off the heading is
+    turned to ``heading +- max_turn`` (towards it), keeping its speed, so the car turns while it
+    moves instead of stopping with its wheels unable to turn it."""
+    off = float(wrap_angle(np.arctan2(v[1], v[0]) - heading))
+    if abs(off) <= max_turn:
+        return v
+    a = heading + np.sign(off) * max_turn
+    return float(np.hypot(*v)) * np.array([np.cos(a), np.sin(a)])
+
+
+class FormationController:
+    """Leader-follower formation with the goal-aware field, width ratio gamma and modes kappa (SPEC §3)."""
+
+    needs = Needs(goals=True, v2v=True)
+    metrics = ("formation",)  # S_ef and its terms, kappa shares (sumo_avoid.metrics.formation)
+
+    def __init__(self, params: FormationParams, ctx):
+        self.p = params
+        self.step_s = float(ctx.step_s)
+        self.tasks: dict[str, EgoTask] = {}
+        self.static = tuple(ctx.obstacles)
+        self._static_polys = pad_polygons(self.static) if self.static else np.zeros((0, 4, 2))
+        self._static_c = np.array([o.mean(axis=0) for o in self.static]).reshape(-1, 2)
+        self._static_r = np.array([np.hypot(*(o - o.mean(axis=0)).T).max() for o in self.static])
+        self.order: list[str] = []
+        self.offsets = np.zeros((0, 2))
+        self.frame: float | None = None
+        self.kappa, self.scale, self._lower_since = 1, 1.0, None
+        self.kappa_steps = [0, 0, 0]
+        self.log: list[list[float]] = []  # [time_s, kappa] at every change
+        self.trail = np.zeros((0, 3))  # the leader's path: x, y, arc length s (a point every 0.5 m)
+        self.gamma_min_seen = np.inf
+        self.last = {}  # the last step's gamma, W, W_max, gamma_min (tests, plots)
+
+    # --- protocol --------------------------------------------------------------------------------
+    def v2v_params(self) -> V2VParams:
+        p = self.p
+        return V2VParams(p.delay_s, p.pos_noise_m, p.vel_noise_mps, 0.0, 0.1, 0.0)
+
+    def add_ego(self, task: EgoTask) -> None:
+        self.tasks[task.vid] = task
+        if not self.order or task.vid not in self.order:
+            self.order = member_order(self.p, set(self.tasks) | set(self.order))
+            self.offsets = ff.slots(self.p.shape, len(self.order), self.p.spacing_m, self.p.apex_deg)
+
+    def remove_ego(self, vid: str) -> None:
+        self.tasks.pop(vid, None)
+
+    def stats(self) -> dict:
+        return {"formation_kappa_steps": list(self.kappa_steps), "formation_mode_log": self.log,
+                "formation_min_gamma": float(self.gamma_min_seen) if np.isfinite(self.gamma_min_seen) else None}
+
+    # --- obstacles -------------------------------------------------------------------------------
+    def _obstacles(self, obs: Observation, lead_row, member_pos):
+        """(polys (O,K,2), mask (E,O) which ego feels which, leader's (O,) bool). The leader's list is
+        shared with every member (V2V); radar returns of a follower only with itself."""
+        snap, E = obs.snapshot, len(obs.ego_ids)
+        parts, owner = [], []  # owner -1: the leader's list (everyone)
+        if obs.detections is None:
+            if lead_row is not None and len(self.static):
+                near = np.hypot(*(self._static_c - snap.pos[lead_row]).T) - self._static_r <= self.p.sense_radius_m
+                parts.append(self._static_polys[near])
+                owner += [-1] * int(near.sum())
+            members = set(self.order)
+            o = np.array([k for k, v in enumerate(snap.ids) if v not in members], int)
+            if lead_row is not None and len(o):
+                o = o[np.hypot(*(snap.pos[o] - snap.pos[lead_row]).T) <= self.p.sense_radius_m]
+                parts.append(footprint_corners(snap.pos[o], snap.heading[o], snap.length[o], snap.width[o]))
+                owner += [-1] * len(o)
+        else:
+            corners, _, who = radar_obstacles(obs, member_pos, self.p.v2v_gate_m)
+            lead_k = obs.ego_ids.index(snap.ids[lead_row]) if lead_row is not None else -2
+            parts.append(corners)
+            owner += [-1 if w == lead_k else int(w) for w in who]
+        parts = [x for x in parts if len(x)]
+        if not parts:
+            return np.zeros((0, 4, 2)), np.zeros((E, 0), bool), np.zeros(0, bool)
+        polys = pad_polygons([pg for part in parts for pg in part])
+        owner = np.asarray(owner)
+        mask = (owner[None, :] == -1) | (owner[None, :] == np.arange(E)[:, None])
+        return polys, mask, owner == -1
+
+    def _repulsion(self, pos, heading, length, width, goal, polys, mask) -> np.ndarray:
+        """Reshaped goal-aware repulsion (E,2) of each ego from the obstacles it feels."""
+        p, E, O = self.p, len(pos), len(polys)
+        if O == 0:
+            return np.zeros((E, 2))
+        ego = footprint_corners(pos, heading, length, width)
+        rho, on_ego, on_obs = convex_distance(np.repeat(ego, O, axis=0), np.tile(polys, (E, 1, 1)))
+        away, n = _unit(on_ego - on_obs)
+        centre, _ = _unit(np.repeat(pos, O, axis=0) - np.tile(polys.mean(axis=1), (E, 1)))
+        away = np.where((n > 1e-6)[:, None], away, centre)
+        to_goal, rho_g = _unit(np.asarray(goal, float) - pos)
+        rho = np.where(mask.ravel(), np.maximum(rho, p.rho_floor_m), np.inf)
+        f1, f2 = ff.repulsion_terms(rho, away, np.repeat(rho_g, O), np.repeat(to_goal, O, axis=0),
+                                    p.eta_re, p.rho0_m, p.n_goal)
+        f = (f1 + f2).reshape(E, O, 2).sum(axis=1)
+        return ff.reshape(f, heading, p.alpha, p.beta)
+
+    def _member_repulsion(self, own_pos, nb_pos, heading, length, width) -> np.ndarray:
+        """(E,2) push of each member away from the others: footprint-to-footprint distance rho
+        (own pose now against the others' V2V positions), k_member (1/rho - 1/rho0) / rho^2."""
+        p, E = self.p, len(own_pos)
+        if E < 2:
+            return np.zeros((E, 2))
+        i, j = np.nonzero(~np.eye(E, dtype=bool))
+        a = footprint_corners(own_pos[i], heading[i], length[i], width[i])
+        b = footprint_corners(nb_pos[j], heading[j], length[j], width[j])
+        rho, on_a, on_b = convex_distance(a, b)
+        away, n = _unit(on_a - on_b)
+        centre, _ = _unit(own_pos[i] - nb_pos[j])
+        away = np.where((n > 1e-6)[:, None], away, centre)
+        rho = np.maximum(rho, p.rho_floor_m)
+        k = np.where(rho <= p.rho0_member_m, 1.0 / rho - 1.0 / p.rho0_member_m, 0.0)
+        f = (p.k_member * k / rho**2)[:, None] * away
+        return np.column_stack([np.bincount(i, f[:, 0], E), np.bincount(i, f[:, 1], E)])
+
+    # --- mode --------------------------------------------------------------------------------------
+    def _mode(self, lead_pos, goal, polys, lead_only, rel_lon, rel_lat, length, width, t) -> None:
+        p = self.p
+        c, s = np.cos(self.frame), np.sin(self.frame)
+        span = float(np.ptp(self.offsets[:, 1]))
+        W = ff.formation_width(self.offsets[:, 1], width)  # the nominal shape's: see the module doc
+        depth = max(float(-self.offsets[:, 0].min()), float(-rel_lon.min())) + 0.5 * length  # nominal or strung out
+        ahead = min(p.lookahead_m, float(np.hypot(*(goal - lead_pos))))
+        if len(polys) and lead_only.any():
+            rel = polys[lead_only] - lead_pos
+            x, y = rel[..., 0] * c + rel[..., 1] * s, -rel[..., 0] * s + rel[..., 1] * c
+            keep = (x.max(axis=1) >= -depth * p.behind) & (x.min(axis=1) <= ahead)
+            iv = np.column_stack([y.min(axis=1), y.max(axis=1)])[keep]
+        else:
+            iv = np.zeros((0, 2))
+        W_max = ff.free_width(iv, p.window_m)
+        gamma = W_max / W
+        s_min = ff.min_lateral_scale(self.offsets, length, width, p.safe_gap_m)
+        g_min = ff.gamma_min(s_min, span, width, p.clear_m, W)
+        want = ff.mode(gamma, g_min)
+        if want >= self.kappa:
+            self._lower_since = None
+            if want > self.kappa:
+                self.kappa = want
+                self.log.append([float(t), want])
+        else:
+            self._lower_since = t if self._lower_since is None else self._lower_since
+            if t - self._lower_since >= p.relax_s - 1e-9:
+                self.kappa, self._lower_since = want, None
+                self.log.append([float(t), want])
+        target = ff.lateral_scale(W_max, span, width, p.clear_m) if self.kappa == 2 else 1.0
+        self.scale = min(target, self.scale + p.widen_rate_ps * self.step_s) if target > self.scale else target
+        self.kappa_steps[self.kappa - 1] += 1
+        self.gamma_min_seen = min(self.gamma_min_seen, gamma)
+        self.last = {"gamma": gamma, "W": W, "W_now": ff.formation_width(rel_lat, width), "W_max": W_max,
+                     "gamma_min": g_min, "kappa": self.kappa}
+
+    # --- the leader's trail (kappa 3) ---------------------------------------------------------------
+    def _extend_trail(self, pos) -> None:
+        if not len(self.trail):
+            self.trail = np.array([[pos[0], pos[1], 0.0]])
+            return
+        d = float(np.hypot(*(pos - self.trail[-1, :2])))
+        if d >= 0.5:
+            self.trail = np.vstack([self.trail, [pos[0], pos[1], self.trail[-1, 2] + d]])
+
+    def _trail_points(self, back_m) -> np.ndarray:
+        """(E, 2) points of the trail ``back_m`` (E,) metres behind its newest point (its first
+        point if the trail is shorter)."""
+        s = np.maximum(self.trail[-1, 2] - np.asarray(back_m, float), 0.0)
+        return np.column_stack([np.interp(s, self.trail[:, 2], self.trail[:, 0]),
+                                np.interp(s, self.trail[:, 2], self.trail[:, 1])])
+
+    # --- one step ----------------------------------------------------------------------------------
+    def act(self, obs: Observation) -> np.ndarray:
+        p, snap = self.p, obs.snapshot
+        ids, rows = obs.ego_ids, obs.ego_rows
+        own_pos, own_vel, nb_pos, nb_vel = obs.v2v.states(snap, rows)
+        heading, length, width = snap.heading[rows], snap.length[rows], snap.width[rows]
+        goals = np.array([self.tasks[v].goal for v in ids], float).reshape(-1, 2)
+        leader = self.order[0] if self.order else None
+        lk = ids.index(leader) if leader in ids else None
+        polys, mask, lead_only = self._obstacles(obs, rows[lk] if lk is not None else None, nb_pos)
+        rep = self._repulsion(own_pos, heading, length, width, goals, polys, mask)
+        out = np.zeros((len(ids), 2))
+        member = self._member_repulsion(own_pos, nb_pos, heading, length, width)
+        _, rho_g = _unit(goals - own_pos)
+        field = ff.attraction(own_pos, goals, p.eta_at) + rep
+        cruise = p.leader_speed_mps * np.minimum(1.0, rho_g / p.slow_radius_m)
+        field_v = _unit(field)[0] * cruise[:, None]
+        if lk is None:  # the leader is done: each follower drives the field to its own goal
+            v = np.array([forward_cone(f, h, np.radians(p.max_turn_deg)) for f, h in zip(field_v, heading)]) + member
+            return v * np.minimum(1.0, p.follower_max_speed_mps / np.maximum(np.hypot(*v.T), 1e-9))[:, None]
+        if self.frame is None:
+            self.frame = float(heading[lk])
+        # the frame turns with the leader's heading, low-passed, and only as fast as the leader moves
+        # (a leader creeping round an obstacle must not swing the rear slots through each other)
+        moving = min(1.0, float(np.hypot(*own_vel[lk])) / p.leader_speed_mps)
+        a = (1.0 - np.exp(-self.step_s / p.frame_tau_s)) * moving
+        self.frame = float(wrap_angle(self.frame + a * wrap_angle(heading[lk] - self.frame)))
+        slot_of = {v: k for k, v in enumerate(self.order)}
+        k_slot = np.array([slot_of[v] for v in ids])
+        c, s = np.cos(self.frame), np.sin(self.frame)
+        rel = own_pos - own_pos[lk]
+        self._mode(own_pos[lk], goals[lk], polys, lead_only, rel[:, 0] * c + rel[:, 1] * s, -rel[:, 0] * s + rel[:, 1] * c,
+                   float(length[lk]), float(width[lk]), snap.time_s)
+        scale = self.scale if self.kappa == 2 else 1.0
+        self._extend_trail(nb_pos[lk])
+        if self.kappa == 3 and p.broken == "trail":
+            slot_pos = self._trail_points(k_slot * p.spacing_m)
+        else:
+            slot_pos = ff.to_world(self.offsets[k_slot], nb_pos[lk], self.frame, scale)
+        err = slot_pos - own_pos
+        fol = np.arange(len(ids)) != lk
+        e_rms = float(np.sqrt((err[fol] ** 2).sum(axis=1).mean())) if fol.any() else 0.0
+        wait = np.clip(1.0 - p.wait_gain_pm * max(e_rms - p.wait_free_m, 0.0), p.wait_min, 1.0)
+        out[lk] = forward_cone(field_v[lk] * wait, heading[lk], np.radians(p.max_turn_deg))
+        gain = p.k_slot_broken_ps if self.kappa == 3 else p.k_slot_ps
+        v = nb_vel[lk] + gain * err + rep + member
+        v = v * np.minimum(1.0, p.follower_max_speed_mps / np.maximum(np.hypot(*v.T), 1e-9))[:, None]
+        out[fol] = v[fol]
+        return out
