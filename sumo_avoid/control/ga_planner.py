@@ -12,12 +12,19 @@ goal:
   ``new_obstacle_gap_m`` from every earlier one);
 * when the rest of the current path comes closer than ``replan_margin_m`` to a known point
   (``clearance``);
+* after the governor stopped the car and it backed up (``blocked``, see below);
 
-the last two at most every ``min_replan_interval_s`` (a pending trigger waits). Each replan is
+the others at most every ``min_replan_interval_s`` (a pending trigger waits). Each replan is
 warm-started from the rest of the previous best path. The path is tracked by pure pursuit
-(:mod:`sumo_avoid.planning.pursuit`); while the best path is not usable (closer than the safety
-radius to a known point) the speed is capped at ``unusable_speed_mps``. The layers (danger time,
-rules) still act on the command.
+(:mod:`sumo_avoid.planning.pursuit`) forward only (the course within ``max_course_deg`` of the
+heading); while the best path is not usable (closer than the safety radius to a known point) the
+speed is capped at ``unusable_speed_mps``. A governor stops the car ``stop_gap_m`` before any known
+point in the strip ahead of it (along its heading and its course), braking at
+``governor_decel_mps2``; stopped there, the car backs up for ``reverse_s``, nose turning towards the
+path, and plans again. The governor keeps the danger-time layer from having to brake: that layer
+holds full braking while anything is within twice its standstill gap ahead, and a car held
+stopped facing an obstacle could never turn away. The layers (danger time, rules) still act on
+the command.
 
 Each plan is logged (``plans.csv``: time, trigger, generations, generation of the first usable
 path, clearance, length, plan time, best fitness per generation, the path) with the map points
@@ -39,7 +46,7 @@ from sumo_avoid.core.polyline import arc_lengths, polyline_project
 from sumo_avoid.core.types import EgoTask, Needs, Observation
 from sumo_avoid.planning import kernels
 from sumo_avoid.planning.ga import GaParams, clearance, plan
-from sumo_avoid.planning.pursuit import pursuit_velocity
+from sumo_avoid.planning.pursuit import aim_angle, corridor_gap, pursuit_velocity
 from sumo_avoid.planning.radar_map import RadarMap, static_returns
 
 
@@ -62,6 +69,12 @@ class GaPlannerParams(GaParams):
     lat_accel_mps2: float = field_doc(2.0, doc="speed on the path's arcs and at its corners: lateral acceleration, m/s^2")
     decel_mps2: float = field_doc(3.0, doc="braking planned before the path's corners, m/s^2")
     unusable_speed_mps: float = field_doc(2.0, doc="speed cap while the best path is not collision-free, m/s")
+    max_course_deg: float = field_doc(80.0, doc="forward, the commanded direction stays within this angle of the heading, deg")
+    stop_gap_m: float = field_doc(4.5, doc="governor: stop this far before a known obstacle point in the strip ahead, m")
+    governor_decel_mps2: float = field_doc(2.0, doc="governor: braking it plans with, m/s^2")
+    corridor_margin_m: float = field_doc(1.0, doc="governor: the strip ahead is the car's width plus this either side, m")
+    reverse_s: float = field_doc(3.0, doc="a car stopped by the governor facing away from its path backs up this long, s")
+    reverse_speed_mps: float = field_doc(1.5, doc="speed of that manoeuvre, m/s")
 
 
 @dataclass
@@ -73,6 +86,8 @@ class _Ego:
     s: float = 0.0
     last_plan_s: float = -np.inf
     pending: str = ""
+    reverse_until_s: float = -np.inf
+    reverse_turn: float = 0.0  # +1: back up turning the nose left, -1: right
     plans: list = field(default_factory=list)
 
 
@@ -102,6 +117,7 @@ class GaPlannerController:
         self.egos: dict[str, _Ego] = {}
         self.log: list[dict] = []
         self.map_rows: list[tuple] = []
+        self.reversals = 0
         kernels.warm()
 
     def add_ego(self, task: EgoTask) -> None:
@@ -121,7 +137,7 @@ class GaPlannerController:
                 "generations_to_usable": float(np.mean(usable)) if usable else None,
                 "generations_to_usable_max": max(usable) if usable else None,
                 "plans_usable_within_20": sum(g <= 20 for g in usable) / n if n else None,
-                "plans_never_usable": n - len(usable)}
+                "plans_never_usable": n - len(usable), "planner_reversals": self.reversals}
 
     def tables(self) -> dict:
         rows = self.map_rows + [(v, *r) for v, st in self.egos.items() for r in st.map.rows]
@@ -143,7 +159,7 @@ class GaPlannerController:
             rest = np.concatenate([pos[None], st.path[np.searchsorted(arc_lengths(st.path), st.s, side="right"):]])
             if len(rest) > 1 and clearance(rest[None], self._points(st))[0] < self.p.replan_margin_m:
                 st.pending = "clearance"
-        if st.pending and t - st.last_plan_s >= self.p.min_replan_interval_s:
+        if st.pending and t - st.last_plan_s >= self.p.min_replan_interval_s and t >= st.reverse_until_s:
             trig, st.pending = st.pending, ""
             return trig
         return ""
@@ -167,7 +183,6 @@ class GaPlannerController:
 
     # --- one step --------------------------------------------------------------------------
     def act(self, obs: Observation) -> np.ndarray:
-        p = self.p
         snap = obs.snapshot
         out = np.zeros((len(obs.ego_ids), 2))
         for k, (vid, row) in enumerate(zip(obs.ego_ids, obs.ego_rows)):
@@ -177,12 +192,36 @@ class GaPlannerController:
             if trigger:
                 self._plan(st, vid, pos, snap.time_s, trigger)
             st.s = max(st.s, polyline_project(st.path, pos))
-            speed = abs(float(obs.ego_speed[k]))
-            cruise = st.task.cruise_speed_mps if st.usable else min(st.task.cruise_speed_mps, p.unusable_speed_mps)
-            out[k] = pursuit_velocity(st.path, st.s, pos, float(snap.heading[row]), cruise,
-                                      max(p.lookahead_min_m, p.lookahead_time_s * speed), p.lat_accel_mps2,
-                                      p.decel_mps2)
+            out[k] = self._track(st, pos, float(snap.heading[row]), float(obs.ego_speed[k]), float(snap.length[row]),
+                                 float(snap.width[row]), snap.time_s)
         return out
+
+    def _track(self, st: _Ego, pos, heading: float, speed: float, length: float, width: float, t: float) -> np.ndarray:
+        """Pure pursuit, under a governor that stops the car ``stop_gap_m`` before a known point in
+        its strip ahead (along its heading and along its course: turning sweeps the strip); stopped there,
+        it backs up for ``reverse_s`` turning its nose towards the path, then plans again."""
+        p = self.p
+        lookahead = max(p.lookahead_min_m, p.lookahead_time_s * abs(speed))
+        alpha = aim_angle(st.path, st.s, pos, heading, lookahead)
+        if t < st.reverse_until_s:
+            return p.reverse_speed_mps * np.array([np.cos(heading + np.pi + st.reverse_turn * np.pi / 4),
+                                                   np.sin(heading + np.pi + st.reverse_turn * np.pi / 4)])
+        # the strip along the heading and along the course the car is turning to
+        course = heading + float(np.clip(alpha, -np.radians(p.max_course_deg), np.radians(p.max_course_deg)))
+        gap = min(corridor_gap(self._points(st), pos, h, 0.5 * length, 0.5 * width + p.corridor_margin_m)
+                  for h in (heading, course))
+        v_gov = np.sqrt(2.0 * p.governor_decel_mps2 * max(gap - p.stop_gap_m, 0.0))
+        if v_gov < 0.5 and abs(speed) < 0.3:  # blocked: back up, then plan again from there
+            st.reverse_until_s, st.reverse_turn = t + p.reverse_s, 1.0 if alpha >= 0 else -1.0
+            st.pending = "blocked"
+            self.reversals += 1
+            return p.reverse_speed_mps * np.array([np.cos(heading + np.pi + st.reverse_turn * np.pi / 4),
+                                                   np.sin(heading + np.pi + st.reverse_turn * np.pi / 4)])
+        cruise = st.task.cruise_speed_mps if st.usable else min(st.task.cruise_speed_mps, p.unusable_speed_mps)
+        v = pursuit_velocity(st.path, st.s, pos, heading, cruise, lookahead, p.lat_accel_mps2, p.decel_mps2,
+                             np.radians(p.max_course_deg))
+        n = float(np.hypot(*v))
+        return v * min(1.0, v_gov / n) if n > 1e-12 else v
 
 
 _LOG_COLUMNS = ("ego", "time_s", "trigger", "generations", "generation_usable", "usable", "clearance_m",

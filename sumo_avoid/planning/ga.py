@@ -44,7 +44,7 @@ class GaParams:
     patience: int = field_doc(6, doc="a plan stops once its best path is usable and unchanged for this many generations")
     elite: int = field_doc(2, doc="best paths carried over unchanged into the next generation")
     w_length: float = field_doc(1.0, doc="w_L, weight of length()")
-    w_obstacle: float = field_doc(1.0, doc="w_o, weight of obstacle()")
+    w_obstacle: float = field_doc(8.0, doc="w_o, weight of obstacle()")
     w_smooth: float = field_doc(0.3, doc="w_s, weight of smooth()")
     radar_range_m: float = field_doc(100.0, positive=True, doc="R_radar in obstacle(): the radar's range, m")
     safety_radius_m: float = field_doc(3.0, doc="a path is usable (collision-free) when every segment keeps this "
