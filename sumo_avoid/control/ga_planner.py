@@ -102,6 +102,20 @@ def _sampled_edges(polygons, step_m: float) -> np.ndarray:
     return np.concatenate(out)
 
 
+def arena_bounds(walls, margin_m: float):
+    """(xmin, ymin, xmax, ymax) the waypoints keep to: the walls' box shrunk by ``margin_m``; None without walls."""
+    if walls is None:
+        return None
+    w = np.asarray(walls, float)
+    return (*(w.min(axis=0) + margin_m), *(w.max(axis=0) - margin_m))
+
+
+def rest_of(path, s_m: float, pos) -> np.ndarray:
+    """What is left of a path for a car at ``pos`` that has come ``s_m`` along it: ``pos``, then
+    the path's vertices beyond s (the warm start of the next plan, and what the clearance trigger checks)."""
+    return np.concatenate([np.asarray(pos, float)[None], path[np.searchsorted(arc_lengths(path), s_m, side="right"):]])
+
+
 class GaPlannerController:
     needs = Needs(goals=True)
     metrics = ()
@@ -110,10 +124,7 @@ class GaPlannerController:
         self.p = params
         self.rng = ctx.rng()
         self.truth_points = _sampled_edges(ctx.obstacles, params.map_cell_m)
-        self.bounds = None
-        if ctx.walls is not None:
-            w = np.asarray(ctx.walls, float)
-            self.bounds = (*(w.min(axis=0) + params.wall_margin_m), *(w.max(axis=0) - params.wall_margin_m))
+        self.bounds = arena_bounds(ctx.walls, params.wall_margin_m)
         self.egos: dict[str, _Ego] = {}
         self.log: list[dict] = []
         self.map_rows: list[tuple] = []
@@ -156,7 +167,7 @@ class GaPlannerController:
         if st.path is None:
             return "takeover"
         if not st.pending and len(self._points(st)):
-            rest = np.concatenate([pos[None], st.path[np.searchsorted(arc_lengths(st.path), st.s, side="right"):]])
+            rest = rest_of(st.path, st.s, pos)
             if len(rest) > 1 and clearance(rest[None], self._points(st))[0] < self.p.replan_margin_m:
                 st.pending = "clearance"
         if st.pending and t - st.last_plan_s >= self.p.min_replan_interval_s and t >= st.reverse_until_s:
@@ -165,10 +176,7 @@ class GaPlannerController:
         return ""
 
     def _plan(self, st: _Ego, vid: str, pos, t: float, trigger: str) -> None:
-        warm = None
-        if st.path is not None:
-            k = np.searchsorted(arc_lengths(st.path), st.s, side="right")
-            warm = np.concatenate([pos[None], st.path[k:]])
+        warm = None if st.path is None else rest_of(st.path, st.s, pos)
         pts = self._points(st)
         t0 = time.perf_counter()
         res = plan(pos, st.task.goal, pts, self.p, self.rng, self.bounds, warm)
