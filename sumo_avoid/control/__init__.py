@@ -8,6 +8,7 @@ from sumo_avoid.control.apf import ApfController, ApfParams
 from sumo_avoid.control.apf_sa import ApfSaController, ApfSaParams
 from sumo_avoid.control.flocking import FlockingController, FlockingParams
 from sumo_avoid.control.formation import FormationController, FormationParams
+from sumo_avoid.control.ga_planner import GaPlannerController, GaPlannerParams
 from sumo_avoid.control.scripted import ScriptedController, ScriptedParams
 from sumo_avoid.core.registry import Registry
 
@@ -16,4 +17,5 @@ CONTROLLERS.register("apf", ApfController, ApfParams)
 CONTROLLERS.register("apf_sa", ApfSaController, ApfSaParams)
 CONTROLLERS.register("flocking", FlockingController, FlockingParams)
 CONTROLLERS.register("formation", FormationController, FormationParams)
+CONTROLLERS.register("ga_planner", GaPlannerController, GaPlannerParams)
 CONTROLLERS.register("scripted", ScriptedController, ScriptedParams)

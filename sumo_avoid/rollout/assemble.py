@@ -51,7 +51,8 @@ class Stack:
         return out
 
     def tables(self) -> dict:
-        return self.sensor.tables()
+        """The sensor's tables and those of a controller that writes some (ga_planner's plan log)."""
+        return {**self.sensor.tables(), **getattr(self.controller, "tables", dict)()}
 
 
 def controller_for(scn, ctx: Context) -> Controller:

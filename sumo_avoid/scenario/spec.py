@@ -87,7 +87,8 @@ class EgoConfig:
 class ArenaConfig:
     size_m: float = field_doc(250.0, doc="side of the square arena (virtual walls), m")
     origin: tuple[float, ...] = field_doc((0.0, 0.0), signed=True, doc="lower-left corner [x, y] of the arena, m")
-    n_agents: int = field_doc(100, doc="number of flocking vehicles spawned at random inside the arena")
+    n_agents: int = field_doc(100, doc="number of flocking vehicles spawned at random inside the arena (0: only the "
+                                       "walls; the egos come from ego.ids, e.g. a field for a path planner)")
     min_spacing_m: float = field_doc(6.0, doc="smallest distance between two start positions, m")
     margin_m: float = field_doc(5.0, doc="start positions keep this far from walls and obstacles, m")
     initial_speed_mps: float = field_doc(0.0, doc="initial speed (random heading), m/s")
@@ -102,8 +103,8 @@ class ArenaConfig:
     def __post_init__(self):
         if len(self.origin) != 2:
             raise ValueError("arena.origin = [x, y]")
-        if self.size_m <= 0 or self.n_agents < 1:
-            raise ValueError("arena.size_m > 0 and arena.n_agents >= 1")
+        if self.size_m <= 0:
+            raise ValueError("arena.size_m > 0")
         if self.starts and (len(self.starts) != self.n_agents or any(len(p) != 2 for p in self.starts)):
             raise FieldError("starts", f"{self.n_agents} points [x, y] (one per agent)", [list(p) for p in self.starts])
 
@@ -154,7 +155,7 @@ class ScenarioSpec:
         None, doc="[random_obstacles] table: static obstacles drawn from the seed, added to [[obstacles]]")
 
     def __post_init__(self):
-        if not self.ego.ids and self.arena is None:
+        if not self.ego.ids and (self.arena is None or self.arena.n_agents == 0):
             raise ValueError("at least one ego id in ego.ids (or an [arena] table)")
 
 

@@ -1,0 +1,76 @@
+"""Plan time of the GA planner per (re)plan at the default population (issue target: median <= 20 ms,
+max <= 100 ms on this machine).
+
+    python benchmarks/planner.py [--seeds 1-5] [--repeat 3]
+
+Runs scenarios/planner/field.toml (the radar-revealed field) for each seed with ``ga_planner``
+and its default parameters, and takes every plan it made: the start (the ego's position then),
+the goal, the obstacle points known then (the first ``known_points`` rows of the ego's radar map)
+and the rest of the previous path (the warm start; its arc length taken as the projection of the
+start, where the controller tracked it step by step). Each plan is then replayed ``repeat`` times with the same
+inputs (its own generator, seeded from the seed and the plan's index) outside the simulation, and
+its time is the fastest replay (the machine is shared; the fastest of a few is the least
+disturbed). Prints the in-run times (as logged, with SUMO in the same process) and the replayed
+ones; the last line: ``plans=N median_ms=X p95_ms=Y max_ms=Z`` (replayed).
+"""
+from __future__ import annotations
+
+import argparse
+import pathlib
+import time
+
+import numpy as np
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+def seeds_of(text: str) -> list[int]:
+    out = []
+    for part in text.split(","):
+        a, _, b = part.partition("-")
+        out += list(range(int(a), int(b or a) + 1))
+    return out
+
+
+def main() -> None:
+    from sumo_avoid.control.ga_planner import arena_bounds, rest_of
+    from sumo_avoid.core.polyline import polyline_project
+    from sumo_avoid.planning import ga
+    from sumo_avoid.plots.planner import parse_path
+    from sumo_avoid.rollout import runner
+    from sumo_avoid.scenario import spec
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", default="1-5")
+    ap.add_argument("--repeat", type=int, default=3)
+    args = ap.parse_args()
+    in_run, replayed = [], []
+    for seed in seeds_of(args.seeds):
+        scn = spec.load(ROOT / "scenarios" / "planner" / "field.toml", seed=seed)
+        res = runner.run(scn)
+        plans, rmap = res.tables["plans"], res.tables["radar_map"]
+        p = scn.params
+        bounds = arena_bounds(res.scene.walls, p.wall_margin_m)
+        prev = None
+        for k, row in enumerate(plans.itertuples()):
+            pts = rmap[rmap["ego"] == row.ego][["x", "y"]].to_numpy()[:row.known_points]
+            path = parse_path(row.path)
+            best = np.inf
+            for _ in range(args.repeat):
+                rng = np.random.default_rng([seed, k])
+                t0 = time.perf_counter()
+                warm = None if prev is None else rest_of(prev, polyline_project(prev, path[0]), path[0])
+                ga.plan(path[0], res.goals[row.ego], pts, p, rng, bounds, warm)
+                best = min(best, 1e3 * (time.perf_counter() - t0))
+            replayed.append(best)
+            in_run.append(row.plan_ms)
+            prev = path
+        print(f"seed {seed}: {len(plans)} plans, in-run median {np.median(plans['plan_ms']):.1f} ms "
+              f"max {plans['plan_ms'].max():.1f} ms", flush=True)
+    r, i = np.array(replayed), np.array(in_run)
+    print(f"in-run:   plans={len(i)} median_ms={np.median(i):.1f} p95_ms={np.percentile(i, 95):.1f} max_ms={i.max():.1f}")
+    print(f"plans={len(r)} median_ms={np.median(r):.1f} p95_ms={np.percentile(r, 95):.1f} max_ms={r.max():.1f}")
+
+
+if __name__ == "__main__":
+    main()

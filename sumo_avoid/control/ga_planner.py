@@ -1,0 +1,237 @@
+"""``ga_planner``: seed 004's radar-driven GA path planner with a pure-pursuit tracker (SPEC §4).
+
+Per ego: a :class:`~sumo_avoid.planning.radar_map.RadarMap` collects the static returns of its own
+radar (``ego.sensor = "radar"``: ``Observation.detections``, tracker memory included; no target
+ids, no ground truth). With ``ego.sensor = "truth"`` the map is the scenario's obstacle polygons
+sampled every ``map_cell_m`` along their edges, all known from the start (to separate perception
+effects from planning). The GA (:mod:`sumo_avoid.planning.ga`) plans a path from the ego to its
+goal:
+
+* at take-over (trigger ``takeover``);
+* when the radar reports an obstacle not seen before (``new_obstacle``: a return farther than
+  ``new_obstacle_gap_m`` from every earlier one);
+* when the rest of the current path comes closer than ``replan_margin_m`` to a known point
+  (``clearance``);
+* after the governor stopped the car and it backed up (``blocked``, see below);
+
+the others at most every ``min_replan_interval_s`` (a pending trigger waits). Each replan is
+warm-started from the rest of the previous best path. The path is tracked by pure pursuit
+(:mod:`sumo_avoid.planning.pursuit`) forward only (the course within ``max_course_deg`` of the
+heading); while the best path is not usable (closer than the safety radius to a known point) the
+speed is capped at ``unusable_speed_mps``. A governor stops the car ``stop_gap_m`` before any known
+point in the strip ahead of it (along its heading and its course), braking at
+``governor_decel_mps2``; stopped there, the car backs up for ``reverse_s``, nose turning towards the
+path, and plans again. The governor keeps the danger-time layer from having to brake: that layer
+holds full braking while anything is within twice its standstill gap ahead, and a car held
+stopped facing an obstacle could never turn away. The layers (danger time, rules) still act on
+the command.
+
+Each plan is logged (``plans.csv``: time, trigger, generations, generation of the first usable
+path, clearance, length, plan time, best fitness per generation, the path) with the map points
+(``radar_map.csv``). Counters in metrics.json: ``plans``, ``replans``, ``generations_to_usable``
+(mean over the plans that found a usable path), ``generations_to_usable_max``,
+``plans_usable_within_20`` (share of plans with a usable path by generation 20, the seed's
+figure), ``plans_never_usable``. Plan times go to timings.json only (not deterministic).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from sumo_avoid.core.config import field_doc
+from sumo_avoid.core.polyline import arc_lengths, polyline_project
+from sumo_avoid.core.types import EgoTask, Needs, Observation
+from sumo_avoid.planning import kernels
+from sumo_avoid.planning.ga import GaParams, clearance, plan
+from sumo_avoid.planning.pursuit import aim_angle, corridor_gap, pursuit_velocity
+from sumo_avoid.planning.radar_map import RadarMap, static_returns
+
+
+@dataclass(frozen=True)
+class GaPlannerParams(GaParams):
+    map_cell_m: float = field_doc(1.0, positive=True, doc="the obstacle map keeps one point per square of this side, m")
+    shadow_depth_m: float = field_doc(6.0, doc="a return also marks the line of sight behind it this deep, m")
+    shadow_step_m: float = field_doc(2.0, doc="spacing of those shadow points, m (0 = no shadow)")
+    face_half_width_m: float = field_doc(3.0, doc="a return also marks its obstacle's face this far either side "
+                                                  "across the line of sight, m")
+    static_speed_mps: float = field_doc(1.0, doc="returns estimated slower than this are static obstacles, m/s")
+    new_obstacle_gap_m: float = field_doc(4.0, doc="a return farther than this from every earlier one is a new "
+                                                   "obstacle (replan), m")
+    replan_margin_m: float = field_doc(2.5, doc="replan when the rest of the path comes closer than this to a "
+                                                "known obstacle point, m")
+    min_replan_interval_s: float = field_doc(0.5, doc="shortest time between two plans of one ego, s")
+    wall_margin_m: float = field_doc(4.0, doc="in an arena, waypoints keep this far inside the walls, m")
+    lookahead_min_m: float = field_doc(6.0, doc="pure pursuit: smallest look-ahead distance, m")
+    lookahead_time_s: float = field_doc(0.8, doc="pure pursuit: look-ahead distance per unit speed, s")
+    lat_accel_mps2: float = field_doc(2.0, doc="speed on the path's arcs and at its corners: lateral acceleration, m/s^2")
+    decel_mps2: float = field_doc(3.0, doc="braking planned before the path's corners, m/s^2")
+    unusable_speed_mps: float = field_doc(2.0, doc="speed cap while the best path is not collision-free, m/s")
+    max_course_deg: float = field_doc(80.0, doc="forward, the commanded direction stays within this angle of the heading, deg")
+    stop_gap_m: float = field_doc(4.5, doc="governor: stop this far before a known obstacle point in the strip ahead, m")
+    governor_decel_mps2: float = field_doc(2.0, doc="governor: braking it plans with, m/s^2")
+    corridor_margin_m: float = field_doc(1.0, doc="governor: the strip ahead is the car's width plus this either side, m")
+    reverse_s: float = field_doc(3.0, doc="a car stopped by the governor facing away from its path backs up this long, s")
+    reverse_speed_mps: float = field_doc(1.5, doc="speed of that manoeuvre, m/s")
+
+
+@dataclass
+class _Ego:
+    task: EgoTask
+    map: RadarMap
+    path: np.ndarray | None = None
+    usable: bool = False
+    s: float = 0.0
+    last_plan_s: float = -np.inf
+    pending: str = ""
+    reverse_until_s: float = -np.inf
+    reverse_turn: float = 0.0  # +1: back up turning the nose left, -1: right
+    plans: list = field(default_factory=list)
+
+
+def _sampled_edges(polygons, step_m: float) -> np.ndarray:
+    """Points every ``step_m`` along the edges of each polygon (the truth map)."""
+    out = [np.zeros((0, 2))]
+    for poly in polygons:
+        poly = np.asarray(poly, float)
+        for a, b in zip(poly, np.roll(poly, -1, axis=0)):
+            k = max(1, int(np.ceil(np.hypot(*(b - a)) / step_m)))
+            out.append(a + np.linspace(0.0, 1.0, k, endpoint=False)[:, None] * (b - a))
+    return np.concatenate(out)
+
+
+def arena_bounds(walls, margin_m: float):
+    """(xmin, ymin, xmax, ymax) the waypoints keep to: the walls' box shrunk by ``margin_m``; None without walls."""
+    if walls is None:
+        return None
+    w = np.asarray(walls, float)
+    return (*(w.min(axis=0) + margin_m), *(w.max(axis=0) - margin_m))
+
+
+def rest_of(path, s_m: float, pos) -> np.ndarray:
+    """What is left of a path for a car at ``pos`` that has come ``s_m`` along it: ``pos``, then
+    the path's vertices beyond s (the warm start of the next plan, and what the clearance trigger checks)."""
+    return np.concatenate([np.asarray(pos, float)[None], path[np.searchsorted(arc_lengths(path), s_m, side="right"):]])
+
+
+class GaPlannerController:
+    needs = Needs(goals=True)
+    metrics = ()
+
+    def __init__(self, params: GaPlannerParams, ctx):
+        self.p = params
+        self.rng = ctx.rng()
+        self.truth_points = _sampled_edges(ctx.obstacles, params.map_cell_m)
+        self.bounds = arena_bounds(ctx.walls, params.wall_margin_m)
+        self.egos: dict[str, _Ego] = {}
+        self.log: list[dict] = []
+        self.map_rows: list[tuple] = []
+        self.reversals = 0
+        kernels.warm()
+
+    def add_ego(self, task: EgoTask) -> None:
+        p = self.p
+        self.egos[task.vid] = _Ego(task, RadarMap(p.map_cell_m, p.shadow_depth_m, p.shadow_step_m, p.new_obstacle_gap_m,
+                                                  p.face_half_width_m))
+
+    def remove_ego(self, vid: str) -> None:
+        st = self.egos.pop(vid)
+        self.map_rows.extend((vid, *r) for r in st.map.rows)
+
+    # --- outputs ---------------------------------------------------------------------------
+    def stats(self) -> dict:
+        usable = [r["generation_usable"] for r in self.log if r["generation_usable"] >= 0]
+        n = len(self.log)
+        return {"plans": n, "replans": sum(r["trigger"] != "takeover" for r in self.log),
+                "generations_to_usable": float(np.mean(usable)) if usable else None,
+                "generations_to_usable_max": max(usable) if usable else None,
+                "plans_usable_within_20": sum(g <= 20 for g in usable) / n if n else None,
+                "plans_never_usable": n - len(usable), "planner_reversals": self.reversals}
+
+    def tables(self) -> dict:
+        rows = self.map_rows + [(v, *r) for v, st in self.egos.items() for r in st.map.rows]
+        return {"plans": pd.DataFrame(self.log, columns=list(_LOG_COLUMNS)),
+                "radar_map": pd.DataFrame(rows, columns=["ego", "time_s", "x", "y", "is_return"])}
+
+    # --- planning ---------------------------------------------------------------------------
+    def _points(self, st: _Ego) -> np.ndarray:
+        return st.map.points if len(st.map) else self.truth_points
+
+    def _trigger(self, st: _Ego, obs: Observation, vid: str, pos, t: float) -> str:
+        if obs.detections is not None:
+            pts, src = static_returns(obs, vid, self.p.static_speed_mps)
+            if st.map.add(src, pts, t) and st.path is not None:
+                st.pending = st.pending or "new_obstacle"
+        if st.path is None:
+            return "takeover"
+        if not st.pending and len(self._points(st)):
+            rest = rest_of(st.path, st.s, pos)
+            if len(rest) > 1 and clearance(rest[None], self._points(st))[0] < self.p.replan_margin_m:
+                st.pending = "clearance"
+        if st.pending and t - st.last_plan_s >= self.p.min_replan_interval_s and t >= st.reverse_until_s:
+            trig, st.pending = st.pending, ""
+            return trig
+        return ""
+
+    def _plan(self, st: _Ego, vid: str, pos, t: float, trigger: str) -> None:
+        warm = None if st.path is None else rest_of(st.path, st.s, pos)
+        pts = self._points(st)
+        t0 = time.perf_counter()
+        res = plan(pos, st.task.goal, pts, self.p, self.rng, self.bounds, warm)
+        ms = 1e3 * (time.perf_counter() - t0)
+        st.path, st.usable, st.s, st.last_plan_s = res.path, res.usable, 0.0, t
+        self.log.append({"ego": vid, "time_s": t, "trigger": trigger, "generations": res.generations,
+                         "generation_usable": -1 if res.generation_usable is None else res.generation_usable,
+                         "usable": res.usable, "clearance_m": res.clearance_m,
+                         "path_length_m": float(arc_lengths(res.path)[-1]), "known_points": len(st.map),
+                         "plan_ms": ms, "best_fitness": ";".join(f"{f:.6g}" for f in res.best_fitness),
+                         "path": ";".join(f"{x:.3f} {y:.3f}" for x, y in res.path)})
+
+    # --- one step --------------------------------------------------------------------------
+    def act(self, obs: Observation) -> np.ndarray:
+        snap = obs.snapshot
+        out = np.zeros((len(obs.ego_ids), 2))
+        for k, (vid, row) in enumerate(zip(obs.ego_ids, obs.ego_rows)):
+            st = self.egos[vid]
+            pos = snap.pos[row]
+            trigger = self._trigger(st, obs, vid, pos, snap.time_s)
+            if trigger:
+                self._plan(st, vid, pos, snap.time_s, trigger)
+            st.s = max(st.s, polyline_project(st.path, pos))
+            out[k] = self._track(st, pos, float(snap.heading[row]), float(obs.ego_speed[k]), float(snap.length[row]),
+                                 float(snap.width[row]), snap.time_s)
+        return out
+
+    def _track(self, st: _Ego, pos, heading: float, speed: float, length: float, width: float, t: float) -> np.ndarray:
+        """Pure pursuit, under a governor that stops the car ``stop_gap_m`` before a known point in
+        its strip ahead (along its heading and along its course: turning sweeps the strip); stopped there,
+        it backs up for ``reverse_s`` turning its nose towards the path, then plans again."""
+        p = self.p
+        lookahead = max(p.lookahead_min_m, p.lookahead_time_s * abs(speed))
+        alpha = aim_angle(st.path, st.s, pos, heading, lookahead)
+        if t < st.reverse_until_s:
+            return p.reverse_speed_mps * np.array([np.cos(heading + np.pi + st.reverse_turn * np.pi / 4),
+                                                   np.sin(heading + np.pi + st.reverse_turn * np.pi / 4)])
+        # the strip along the heading and along the course the car is turning to
+        course = heading + float(np.clip(alpha, -np.radians(p.max_course_deg), np.radians(p.max_course_deg)))
+        gap = min(corridor_gap(self._points(st), pos, h, 0.5 * length, 0.5 * width + p.corridor_margin_m)
+                  for h in (heading, course))
+        v_gov = np.sqrt(2.0 * p.governor_decel_mps2 * max(gap - p.stop_gap_m, 0.0))
+        if v_gov < 0.5 and abs(speed) < 0.3:  # blocked: back up, then plan again from there
+            st.reverse_until_s, st.reverse_turn = t + p.reverse_s, 1.0 if alpha >= 0 else -1.0
+            st.pending = "blocked"
+            self.reversals += 1
+            return p.reverse_speed_mps * np.array([np.cos(heading + np.pi + st.reverse_turn * np.pi / 4),
+                                                   np.sin(heading + np.pi + st.reverse_turn * np.pi / 4)])
+        cruise = st.task.cruise_speed_mps if st.usable else min(st.task.cruise_speed_mps, p.unusable_speed_mps)
+        v = pursuit_velocity(st.path, st.s, pos, heading, cruise, lookahead, p.lat_accel_mps2, p.decel_mps2,
+                             np.radians(p.max_course_deg))
+        n = float(np.hypot(*v))
+        return v * min(1.0, v_gov / n) if n > 1e-12 else v
+
+
+_LOG_COLUMNS = ("ego", "time_s", "trigger", "generations", "generation_usable", "usable", "clearance_m",
+                "path_length_m", "known_points", "plan_ms", "best_fitness", "path")
+

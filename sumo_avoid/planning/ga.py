@@ -1,0 +1,284 @@
+"""The genetic-algorithm path planner of seed 004 (SPEC §4): fitness, the four operators, the GA.
+
+A chromosome is a path of n waypoints WP_1..WP_n, WP_1 the start and WP_n the goal (both fixed); a
+population is an (N, n, 2) array. Obstacles are points (what the radar reported, see
+:mod:`sumo_avoid.planning.radar_map`); the clearance of a path is the smallest distance from any
+of its segments to any obstacle point. Fitness (SPEC §4, eq. 1-4, larger is better, max_k over
+the population):
+
+    length(p)   = 1 - L(p) / max_k L(p_k)                          L = summed segment lengths
+    obstacle(p) = min_i 0.01 / (0.01 + exp(-4.6 dist(WP_i WP_i+1, obs) / R_radar))
+    smooth(p)   = S(p) / max_k S(p_k),  S = sum_{i=2}^{n-1} |WP_i-1 WP_i+1| / (|WP_i-1 WP_i| + |WP_i WP_i+1|)
+    Fitness(p)  = w_L length(p) + w_o obstacle(p) + w_s smooth(p)
+
+Operators (seed §2.3): single-point crossover (two paths swap their first c waypoints), mutation
+(a waypoint moves, by a Gaussian step, when its uniform draw exceeds T_m), regression (inner
+waypoints pulled towards the straight start-goal segment, kept only where the path stays
+collision-free) and smoothing (WP_i replaced by the midpoint of WP_i-1 WP_i+1 when
+(|WP_i-1 WP_i| + |WP_i WP_i+1|) / |WP_i-1 WP_i+1| > T_s).
+
+Where the seed is silent (selection, elitism, initialisation, stopping), this module chooses:
+a path is *usable* when its clearance is at least ``safety_radius_m``; ranking puts usable paths
+first, by fitness, then the others by clearance (feasibility first, Deb's rule: the seed's obstacle term is ~0.01 at
+contact and barely changes within metres of an obstacle, so it cannot on its own keep a path off
+one); ``elite`` best paths survive unchanged; parents by binary tournament on that ranking. A plan
+stops after ``generations`` or once its best path is usable and has stayed the same for
+``patience`` generations. Everything random comes from one ``numpy.random.Generator``: same
+inputs and generator state, same plan.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sumo_avoid.core.config import field_doc
+from sumo_avoid.planning import kernels
+
+
+@dataclass(frozen=True)
+class GaParams:
+    waypoints: int = field_doc(8, doc="n, waypoints per path including start and goal (>= 3)")
+    population: int = field_doc(40, doc="paths per generation (>= 4)")
+    generations: int = field_doc(40, doc="most generations per plan")
+    patience: int = field_doc(6, doc="a plan stops once its best path is usable and unchanged for this many generations")
+    elite: int = field_doc(2, doc="best paths carried over unchanged into the next generation")
+    w_length: float = field_doc(1.0, doc="w_L, weight of length()")
+    w_obstacle: float = field_doc(8.0, doc="w_o, weight of obstacle()")
+    w_smooth: float = field_doc(0.3, doc="w_s, weight of smooth()")
+    radar_range_m: float = field_doc(100.0, positive=True, doc="R_radar in obstacle(): the radar's range, m")
+    safety_radius_m: float = field_doc(3.0, doc="a path is usable (collision-free) when every segment keeps this "
+                                                "clearance from every obstacle point, m")
+    crossover_prob: float = field_doc(0.8, doc="probability that a pair of parents is crossed over")
+    mutation_threshold: float = field_doc(0.7, doc="T_m: an inner waypoint moves when its U(0,1) draw exceeds T_m")
+    mutation_sigma_m: float = field_doc(6.0, doc="standard deviation of a mutation step (each axis), m")
+    regression_prob: float = field_doc(0.3, doc="probability that an offspring is offered the regression operator")
+    regression_rate: float = field_doc(0.5, doc="regression moves each inner waypoint this fraction of the way "
+                                                "to its foot on the start-goal segment")
+    smooth_threshold: float = field_doc(1.15, doc="T_s of the smoothing operator (> 1)")
+    init_spread_m: float = field_doc(25.0, doc="standard deviation of the initial waypoints' offset across the "
+                                               "start-goal line, m")
+
+    def __post_init__(self):
+        if self.waypoints < 3 or self.population < 4 or self.generations < 1:
+            raise ValueError("waypoints >= 3, population >= 4, generations >= 1")
+        if not 0 <= self.elite < self.population:
+            raise ValueError("0 <= elite < population")
+        if self.smooth_threshold <= 1.0:
+            raise ValueError("smooth_threshold > 1")
+        for name in ("crossover_prob", "mutation_threshold", "regression_prob", "regression_rate"):
+            if not 0.0 <= getattr(self, name) <= 1.0:
+                raise ValueError(f"0 <= {name} <= 1")
+
+
+# ------------------------------------------------------------------------------------------------
+# fitness terms, vectorised over the population (N, n, 2)
+# ------------------------------------------------------------------------------------------------
+def path_lengths(pop) -> np.ndarray:
+    """(N,) summed segment lengths L(p), m."""
+    return np.hypot(*np.diff(pop, axis=1).transpose(2, 0, 1)).sum(axis=1)
+
+
+def clearance(pop, points) -> np.ndarray:
+    """(N,) smallest distance from any segment of each path to any obstacle point, m (inf: no points)."""
+    pop = np.ascontiguousarray(pop, float)
+    pts = np.asarray(points, float).reshape(-1, 2)
+    if len(pts) == 0:
+        return np.full(len(pop), np.inf)
+    return kernels.clearance(pop, np.ascontiguousarray(pts[np.argsort(pts[:, 0], kind="stable")]))
+
+
+def obstacle_term(clear, radar_range_m: float) -> np.ndarray:
+    """obstacle(p) from each path's clearance (SPEC §4 eq. 2): ~0.0099 at contact, 0.5 at one radar range."""
+    return 0.01 / (0.01 + np.exp(-4.6 * np.asarray(clear, float) / radar_range_m))
+
+
+def smooth_raw(pop) -> np.ndarray:
+    """(N,) S(p) = sum over inner waypoints of |WP_i-1 WP_i+1| / (|WP_i-1 WP_i| + |WP_i WP_i+1|)
+    (a term is 1 where both segments have zero length)."""
+    seg = np.hypot(*np.diff(pop, axis=1).transpose(2, 0, 1))  # (N, n-1)
+    chord = np.hypot(*(pop[:, 2:] - pop[:, :-2]).transpose(2, 0, 1))  # (N, n-2)
+    around = seg[:, :-1] + seg[:, 1:]
+    return np.where(around > 0, chord / np.where(around > 0, around, 1.0), 1.0).sum(axis=1)
+
+
+def fitness_of(pop, clear, p: GaParams) -> np.ndarray:
+    """(N,) SPEC §4 eq. 4 from the paths and their clearances (N,)."""
+    L = path_lengths(pop)
+    S = smooth_raw(pop)
+    length = 1.0 - L / max(L.max(), 1e-12)
+    smooth = S / S.max() if S.max() > 0 else np.zeros(len(pop))
+    return p.w_length * length + p.w_obstacle * obstacle_term(clear, p.radar_range_m) + p.w_smooth * smooth
+
+
+def fitness(pop, points, p: GaParams):
+    """(fitness (N,), clearance (N,)) of every path (SPEC §4 eq. 4)."""
+    pop = np.asarray(pop, float)
+    c = clearance(pop, points)
+    return fitness_of(pop, c, p), c
+
+
+def violation(pop, points, radius_m: float, first_radius_m: float):
+    """(clearance (N,), violation (N,)): how far each path falls short of being usable, m (0 = usable):
+    its first segment must keep ``first_radius_m`` from every point, the others ``radius_m``. (The
+    ego may already be closer than the safety radius to a point it has just discovered; every path
+    starts there, so the first segment asks only that the ego not get closer.)"""
+    pop = np.asarray(pop, float)
+    c1 = clearance(pop[:, :2], points)
+    c2 = clearance(pop[:, 1:], points)
+    return np.minimum(c1, c2), np.maximum(np.maximum(radius_m - c2, first_radius_m - c1), 0.0)
+
+
+# ------------------------------------------------------------------------------------------------
+# operators (pure: every random draw is an argument)
+# ------------------------------------------------------------------------------------------------
+def crossover(a, b, cut: int):
+    """Single-point crossover: the two paths swap their first ``cut`` waypoints (returns new arrays)."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return np.concatenate([b[:cut], a[cut:]]), np.concatenate([a[:cut], b[cut:]])
+
+
+def mutate(pop, draws, steps, threshold: float):
+    """Inner waypoint i of path k moves by ``steps[k, i]`` where ``draws[k, i] > threshold``
+    (draws (N, n) uniform, steps (N, n, 2) m); start and goal never move."""
+    out = np.array(pop, float)
+    move = np.asarray(draws) > threshold
+    move[:, [0, -1]] = False
+    out[move] += np.asarray(steps, float)[move]
+    return out
+
+
+def regress(pop, points, rate: float, safety_radius_m: float, first_radius_m: float | None = None):
+    """Pull every inner waypoint ``rate`` of the way towards its foot on the straight start-goal
+    segment; a path keeps the move only if it stays usable (:func:`violation` 0; by default the
+    first segment too needs ``safety_radius_m``). Returns (paths, moved (N,) bool)."""
+    pop = np.asarray(pop, float)
+    s, g = pop[:, :1], pop[:, -1:]
+    d = g - s
+    den = (d * d).sum(-1)
+    t = np.clip(((pop - s) * d).sum(-1) / np.where(den > 0, den, 1.0), 0.0, 1.0)
+    foot = s + t[..., None] * d
+    cand = pop + rate * (foot - pop)
+    cand[:, [0, -1]] = pop[:, [0, -1]]
+    first = safety_radius_m if first_radius_m is None else first_radius_m
+    ok = violation(cand, points, safety_radius_m, first)[1] <= 0.0
+    return np.where(ok[:, None, None], cand, pop), ok
+
+
+def smooth(pop, threshold: float):
+    """Smoothing operator, in waypoint order (each test sees the already smoothed predecessor):
+    WP_i becomes the midpoint of WP_i-1 WP_i+1 when (|WP_i-1 WP_i| + |WP_i WP_i+1|) / |WP_i-1 WP_i+1| > T_s."""
+    return kernels.smooth(np.array(pop, float), float(threshold))
+
+
+# ------------------------------------------------------------------------------------------------
+# the GA
+# ------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Plan:
+    path: np.ndarray  # (n, 2) best path, m
+    usable: bool  # collision-free: violation 0 (clearance >= safety radius; first segment: see violation())
+    clearance_m: float
+    best_fitness: tuple[float, ...]  # best fitness (usable first) of generation 0, 1, ...
+    generation_usable: int | None  # first generation with a usable path (0 = initial population)
+
+    @property
+    def generations(self) -> int:
+        return len(self.best_fitness) - 1
+
+
+def resample(path, n: int) -> np.ndarray:
+    """(n, 2) points evenly spaced in arc length along a polyline (its ends kept)."""
+    path = np.asarray(path, float)
+    cum = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(path, axis=0).T))])
+    s = np.linspace(0.0, cum[-1], n)
+    return np.column_stack([np.interp(s, cum, path[:, 0]), np.interp(s, cum, path[:, 1])])
+
+
+def initial_population(start, goal, p: GaParams, rng: np.random.Generator, bounds, warm=None) -> np.ndarray:
+    """The straight line; the warm path (resampled) and mutated copies of it for a quarter of the
+    population; the rest straight-line stations offset across the line by N(0, init_spread_m)."""
+    n, N = p.waypoints, p.population
+    start, goal = np.asarray(start, float), np.asarray(goal, float)
+    line = start + np.linspace(0.0, 1.0, n)[:, None] * (goal - start)
+    d = goal - start
+    normal = np.array([-d[1], d[0]]) / max(float(np.hypot(*d)), 1e-12)
+    pop = line[None] + rng.normal(0.0, p.init_spread_m, (N, n, 1)) * normal
+    pop[:, [0, -1]] = start, goal
+    pop[0] = line
+    if warm is not None:
+        w = resample(warm, n)
+        w[0], w[-1] = start, goal
+        k = max(1, N // 4)
+        pop[1:k + 1] = w
+        pop[2:k + 1] = mutate(pop[2:k + 1], rng.random((k - 1, n)), rng.normal(0.0, p.mutation_sigma_m, (k - 1, n, 2)),
+                              p.mutation_threshold)
+    return clip(pop, bounds)
+
+
+def clip(pop, bounds):
+    """Waypoints kept inside the box ``bounds`` = (xmin, ymin, xmax, ymax), or unchanged if None."""
+    if bounds is None:
+        return pop
+    lo, hi = np.asarray(bounds[:2], float), np.asarray(bounds[2:], float)
+    out = pop.copy()
+    out[:, 1:-1] = np.clip(pop[:, 1:-1], lo, hi)
+    return out
+
+
+def _ranking(f, v):
+    """Indices best first (Deb's rule): usable paths (violation v == 0) by fitness, then the others
+    by violation, the least first. Stable: ties keep their order."""
+    usable = v <= 0.0
+    return np.lexsort((np.where(usable, -f, v), ~usable))
+
+
+def next_generation(pop, order, p: GaParams, points, rng: np.random.Generator, bounds, first_radius_m) -> np.ndarray:
+    N, n = pop.shape[:2]
+    rank = np.empty(N, int)
+    rank[order] = np.arange(N)
+    kids = N - p.elite
+    pairs = (kids + 1) // 2
+    duel = rng.integers(0, N, (2 * pairs, 2))  # binary tournaments
+    parents = np.where(rank[duel[:, 0]] <= rank[duel[:, 1]], duel[:, 0], duel[:, 1])
+    a, b = pop[parents[0::2]], pop[parents[1::2]]
+    cuts = rng.integers(1, n - 1, pairs)
+    cross = rng.random(pairs) < p.crossover_prob
+    k = np.arange(n)[None, :, None] < cuts[:, None, None]
+    swap = k & cross[:, None, None]
+    a2, b2 = np.where(swap, b, a), np.where(swap, a, b)  # crossover() for every pair at once
+    off = np.concatenate([a2, b2])[:kids]
+    off = mutate(off, rng.random((kids, n)), rng.normal(0.0, p.mutation_sigma_m, (kids, n, 2)), p.mutation_threshold)
+    off = clip(off, bounds)
+    offer = rng.random(kids) < p.regression_prob
+    if offer.any():
+        off[offer] = regress(off[offer], points, p.regression_rate, p.safety_radius_m, first_radius_m)[0]
+    off = smooth(off, p.smooth_threshold)
+    return np.concatenate([pop[order[:p.elite]], off])
+
+
+def plan(start, goal, points, p: GaParams, rng: np.random.Generator, bounds=None, warm=None) -> Plan:
+    """Run the GA from ``start`` to ``goal`` around obstacle ``points`` (P, 2)."""
+    points = np.asarray(points, float).reshape(-1, 2)
+    r = p.safety_radius_m
+    d0 = float(np.hypot(*(points - np.asarray(start, float)).T).min()) if len(points) else np.inf
+    first = min(r, d0 - 0.01)
+    pop = initial_population(start, goal, p, rng, bounds, warm)
+    history: list[float] = []
+    usable_at = None
+    best, same = None, 0
+    for gen in range(p.generations + 1):
+        c, v = violation(pop, points, r, first)
+        f = fitness_of(pop, c, p)
+        order = _ranking(f, v)
+        top = order[0]
+        history.append(float(f[top]))
+        usable = bool(v[top] <= 0.0)
+        if usable and usable_at is None:
+            usable_at = gen
+        same = same + 1 if best is not None and np.array_equal(pop[top], best) else 0
+        best = pop[top].copy()
+        if gen == p.generations or (usable and same >= p.patience):
+            return Plan(best, usable, float(c[top]), tuple(history), usable_at)
+        pop = next_generation(pop, order, p, points, rng, bounds, first)
+    raise AssertionError("unreachable")

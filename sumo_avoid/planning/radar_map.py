@@ -1,0 +1,87 @@
+"""What one ego's radar has revealed of the static world: a growing set of obstacle points.
+
+The radar (:mod:`sumo_avoid.sensing.radar`) reports one return per target and scan, at the
+target's nearest visible point, never its id. A planner that only kept those points would route
+straight through the unseen body behind a face it saw head-on, so each static return also marks
+its *shadow*, points every ``shadow_step_m`` along the line of sight behind it up to
+``shadow_depth_m``, and its *face*, points at the same spacing across the line of sight up to
+``face_half_width_m`` either side (at the nearest point of a convex obstacle its surface is
+perpendicular to the line of sight, or it is a corner): the obstacle is assumed to be at least
+that deep and that wide.
+Points are kept once per ``cell_m`` square (the first one seen there), so the map grows with the
+area revealed, not with the number of scans. A return farther than ``new_gap_m`` from every return
+seen before is a *new obstacle* (the planner's replanning trigger). Pure numpy.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from sumo_avoid.sensing.perception import velocity_estimate
+
+_KEY = 1 << 32  # cell (i, j) -> one int64 key i * 2^32 + j
+
+
+class RadarMap:
+    def __init__(self, cell_m: float, shadow_depth_m: float, shadow_step_m: float, new_gap_m: float,
+                 face_half_width_m: float = 0.0):
+        self.cell_m = cell_m
+        step = shadow_step_m if shadow_step_m > 0 else np.inf
+        self.shadow = np.arange(1, int(shadow_depth_m / step) + 1) * step  # depths behind a return, m
+        side = np.arange(1, int(face_half_width_m / step) + 1) * step
+        self.face = np.concatenate([-side[::-1], side])  # offsets across the line of sight, m
+        self.new_gap_m = new_gap_m
+        self._cells: set[int] = set()
+        self._points: list[np.ndarray] = []
+        self._returns = np.zeros((0, 2))  # every return kept (not its shadow): the new-obstacle test
+        self.rows: list[tuple] = []  # (time_s, x, y, is_return) of each kept point
+
+    @property
+    def points(self) -> np.ndarray:
+        """(M, 2) every kept point, in the order they were added, m."""
+        return np.concatenate(self._points) if self._points else np.zeros((0, 2))
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    def add(self, sensor_pos, returns, time_s: float) -> bool:
+        """Fold in static returns (K, 2) seen from ``sensor_pos`` (K, 2) or (2,). Returns True when
+        one of them is a new obstacle."""
+        ret = np.asarray(returns, float).reshape(-1, 2)
+        if len(ret) == 0:
+            return False
+        new = True if len(self._returns) == 0 else bool(
+            (np.hypot(*(ret[:, None] - self._returns[None]).transpose(2, 0, 1)).min(axis=1) > self.new_gap_m).any())
+        sight = ret - np.broadcast_to(np.asarray(sensor_pos, float), ret.shape)
+        u = sight / np.maximum(np.hypot(*sight.T), 1e-9)[:, None]
+        behind = (ret[:, None] + self.shadow[None, :, None] * u[:, None]).reshape(-1, 2)
+        across = (ret[:, None] + self.face[None, :, None] * np.column_stack([-u[:, 1], u[:, 0]])[:, None]).reshape(-1, 2)
+        pts = np.concatenate([ret, behind, across])
+        is_ret = np.arange(len(pts)) < len(ret)
+        ij = np.floor(pts / self.cell_m).astype(np.int64)
+        keys = ij[:, 0] * _KEY + ij[:, 1]
+        keep = []
+        for k, key in enumerate(keys.tolist()):  # a few dozen per scan
+            if key not in self._cells:
+                self._cells.add(key)
+                keep.append(k)
+        if keep:
+            self._points.append(pts[keep])
+            self.rows.extend((time_s, float(x), float(y), bool(r)) for (x, y), r in zip(pts[keep], is_ret[keep]))
+            self._returns = np.concatenate([self._returns, pts[keep][is_ret[keep]]])
+        return new
+
+
+def static_returns(obs, vid: str, static_speed_mps: float):
+    """Ego ``vid``'s radar returns (every mount, tracker memory included) whose estimated velocity
+    (:func:`~sumo_avoid.sensing.perception.velocity_estimate`) is below ``static_speed_mps``:
+    (points (K, 2), sensor positions (K, 2)). Empty without a radar."""
+    pts, src = [np.zeros((0, 2))], [np.zeros((0, 2))]
+    for det in obs.detections or ():
+        k = det.of(vid)
+        if len(k) == 0:
+            continue
+        v = velocity_estimate(det, k)
+        still = np.hypot(*v.T) < static_speed_mps
+        pts.append(det.points()[k[still]])
+        src.append(det.sensor_pos[det.ego[k[still]]])
+    return np.concatenate(pts), np.concatenate(src)

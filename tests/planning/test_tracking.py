@@ -1,0 +1,47 @@
+"""The radar obstacle map (shadow, face, cells, new-obstacle test) and the pure-pursuit tracker,
+pinned to hand-computed values."""
+import math
+
+import numpy as np
+import pytest
+
+from sumo_avoid.planning.pursuit import corner_angles, pursuit_velocity
+from sumo_avoid.planning.radar_map import RadarMap
+
+
+def test_a_return_marks_its_shadow_and_face():
+    m = RadarMap(cell_m=1.0, shadow_depth_m=4.0, shadow_step_m=2.0, new_gap_m=4.0, face_half_width_m=2.0)
+    assert m.add([0.0, 0.5], [[10.5, 0.5]], 1.0)  # the first return is a new obstacle
+    # shadow along the line of sight (+x): 12.5, 14.5; face across it: y = -1.5 and 2.5
+    assert sorted(map(tuple, m.points.tolist())) == [(10.5, -1.5), (10.5, 0.5), (10.5, 2.5), (12.5, 0.5), (14.5, 0.5)]
+    assert [r[3] for r in m.rows] == [True, False, False, False, False]
+
+
+def test_cells_keep_one_point_and_new_obstacles_are_far_from_earlier_returns():
+    m = RadarMap(cell_m=1.0, shadow_depth_m=0.0, shadow_step_m=0.0, new_gap_m=4.0)
+    assert m.add([0.0, 0.0], [[10.2, 0.2]], 0.0)
+    assert not m.add([0.0, 0.0], [[10.7, 0.9]], 0.1)  # same cell: nothing added, not new
+    assert len(m) == 1
+    assert not m.add([0.0, 0.0], [[13.0, 0.0]], 0.2)  # 2.8 m from the first return: same obstacle
+    assert len(m) == 2
+    assert m.add([0.0, 0.0], [[30.0, 0.0]], 0.3)  # 17 m away: a new obstacle
+    assert not m.add([0.0, 0.0], np.zeros((0, 2)), 0.4)
+
+
+def test_pursuit_aims_at_the_lookahead_point_at_the_arc_speed():
+    path = np.array([[0.0, 0.0], [100.0, 0.0]])
+    v = pursuit_velocity(path, 0.0, [0.0, 1.0], 0.0, cruise_mps=10.0, lookahead_m=5.0, lat_accel_mps2=2.0,
+                         decel_mps2=3.0)
+    # aim (5, 0) from (0, 1): direction (5, -1)/sqrt(26); sin(alpha) = 1/sqrt(26);
+    # arc speed sqrt(2 * 5 / (2 / sqrt(26))) = sqrt(5 sqrt(26)) = 5.0493
+    assert np.hypot(*v) == pytest.approx(math.sqrt(5 * math.sqrt(26)), rel=1e-9)
+    assert v / np.hypot(*v) == pytest.approx(np.array([5.0, -1.0]) / math.sqrt(26))
+
+
+def test_pursuit_brakes_for_a_corner_ahead():
+    path = np.array([[0.0, 0.0], [20.0, 0.0], [20.0, 20.0]])
+    assert corner_angles(path) == pytest.approx([math.pi / 2])
+    v = pursuit_velocity(path, 0.0, [0.0, 0.0], 0.0, cruise_mps=20.0, lookahead_m=5.0, lat_accel_mps2=2.0,
+                         decel_mps2=3.0)
+    # corner radius 5 / (2 sin 45 deg) = 3.5355 m, 20 m ahead: sqrt(2 * 3.5355 + 2 * 3 * 20) = 11.273
+    assert v == pytest.approx([math.sqrt(2 * 5 / (2 * math.sin(math.pi / 4)) + 120.0), 0.0])
