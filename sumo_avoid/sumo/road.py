@@ -166,7 +166,7 @@ class Road:
 
     # ------------------------------------------------------------------ construction
     @classmethod
-    def from_net_file(cls, path) -> "Road":
+    def from_net_file(cls, path) -> Road:
         """Parse ``path`` once (cached per absolute path and modification time)."""
         p = os.path.abspath(os.fspath(path))
         return _load_cached(p, os.stat(p).st_mtime_ns)
@@ -317,22 +317,8 @@ class Road:
 
     def _via_lanes(self, conn) -> list[tuple]:
         """(lane, shape, speed limit) of the chain of internal lanes of a connection (possibly split in several)."""
-        out = []
-        target = conn.getToLane().getID()
-        via = conn.getViaLaneID()
-        guard = 0
-        while via and guard < 32:
-            guard += 1
-            lane = self._net.getLane(via)
-            out.append((lane, np.asarray(lane.getShape(), float), float(lane.getSpeed())))
-            outs = lane.getOutgoing()
-            if not outs:
-                break
-            nxt = next((c for c in outs if c.getToLane().getID() == target), outs[0])
-            via = nxt.getViaLaneID()
-            if not via and nxt.getToLane().getID().startswith(":"):
-                via = nxt.getToLane().getID()
-        return out
+        return [(lane, np.asarray(lane.getShape(), float), float(lane.getSpeed()))
+                for lane in self.right_of_way.via_chain(conn)]
 
     # ------------------------------------------------------------------ plotting support
     def lane_lines(self, kind: str | None = None) -> list[np.ndarray]:
