@@ -14,6 +14,7 @@ import pandas as pd
 from sumo_avoid.metrics import clean, compute
 from sumo_avoid.metrics.series import series
 from sumo_avoid.plots.arena import plot_arena
+from sumo_avoid.plots.formation import plot_formation
 from sumo_avoid.plots.trajectories import plot_timeseries, plot_trajectories
 from sumo_avoid.rollout.assemble import metric_names
 from sumo_avoid.rollout.result import RunResult
@@ -40,4 +41,6 @@ def write_outputs(res: RunResult, out_dir: pathlib.Path, plots: bool = True) -> 
         plot_timeseries(series(res), out_dir / "timeseries.png", title=title)
         if res.scene.walls is not None or res.scene.obstacles:  # arena / obstacles: walls and polygons drawn
             plot_arena(res, out_dir / "arena.png", f"{m['scenario']} · seed {m['seed']} · mu {m.get('mu', 0):.3f}")
+        if "formation_mode_log" in m:  # a formation: paths and kappa over time
+            plot_formation(res, m, out_dir / "formation.png", f"{title} · S_ef {m.get('s_ef') or 0:.3f}")
     return m
