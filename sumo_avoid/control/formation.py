@@ -96,7 +96,7 @@ class FormationParams:
     lookahead_m: float = field_doc(25.0, positive=True, doc="W_max: obstacles up to this far ahead of the leader, m")
     window_m: float = field_doc(30.0, positive=True, doc="W_max: half width of the window across the heading, m")
     clear_m: float = field_doc(1.0, doc="kappa 2: clearance kept to the obstacles on each side, m")
-    safe_gap_m: float = field_doc(1.0, doc="gamma_min: sideways gap neighbours keep, m")
+    safe_gap_m: float = field_doc(2.0, doc="gamma_min: sideways gap neighbours keep, m")
     relax_s: float = field_doc(2.0, doc="a lower kappa is taken only after it held this long, s")
     widen_rate_ps: float = field_doc(0.1, positive=True, doc="the lateral scale grows at most this fast, 1/s")
     broken: str = field_doc("slots", doc="kappa 3: 'slots' (weak pull to the nominal slots, each avoids on its "
