@@ -15,6 +15,7 @@ from sumo_avoid.metrics import clean, compute
 from sumo_avoid.metrics.series import series
 from sumo_avoid.plots.arena import plot_arena
 from sumo_avoid.plots.planner import plot_convergence, plot_plans
+from sumo_avoid.plots.formation import plot_formation
 from sumo_avoid.plots.trajectories import plot_timeseries, plot_trajectories
 from sumo_avoid.rollout.assemble import metric_names
 from sumo_avoid.rollout.result import RunResult
@@ -54,4 +55,6 @@ def write_outputs(res: RunResult, out_dir: pathlib.Path, plots: bool = True) -> 
             short = f"{m['scenario']} · seed {m['seed']}"
             plot_plans(res.tables["plans"], res.tables["radar_map"], res.traj, res.scene, out_dir / "plans.png", short)
             plot_convergence(res.tables["plans"], out_dir / "convergence.png", short)
+        if "formation_mode_log" in m:  # a formation: paths and kappa over time
+            plot_formation(res, m, out_dir / "formation.png", f"{title} · S_ef {m.get('s_ef') or 0:.3f}")
     return m

@@ -42,7 +42,7 @@ within ``sense_radius_m`` (``ego.sensor = "truth"``), or its own radar returns a
 (``"radar"``, returns near a member's V2V position dropped). Followers get the leader's list and the
 members' states over V2V (Needs(v2v=True): delay and noise of the ``[controllers.formation]``
 keys); with radar each follower adds its own returns. When the leader has reached its goal (and
-left), each follower drives the leader's field to its own goal.
+left), each follower drives the leader's field to its own goal, sensing around itself.
 """
 from __future__ import annotations
 
@@ -96,7 +96,7 @@ class FormationParams:
     lookahead_m: float = field_doc(25.0, positive=True, doc="W_max: obstacles up to this far ahead of the leader, m")
     window_m: float = field_doc(30.0, positive=True, doc="W_max: half width of the window across the heading, m")
     clear_m: float = field_doc(1.0, doc="kappa 2: clearance kept to the obstacles on each side, m")
-    safe_gap_m: float = field_doc(1.0, doc="gamma_min: sideways gap neighbours keep, m")
+    safe_gap_m: float = field_doc(2.0, doc="gamma_min: sideways gap neighbours keep, m")
     relax_s: float = field_doc(2.0, doc="a lower kappa is taken only after it held this long, s")
     widen_rate_ps: float = field_doc(0.1, positive=True, doc="the lateral scale grows at most this fast, 1/s")
     broken: str = field_doc("slots", doc="kappa 3: 'slots' (weak pull to the nominal slots, each avoids on its "
@@ -194,15 +194,18 @@ class FormationController:
         shared with every member (V2V); radar returns of a follower only with itself."""
         snap, E = obs.snapshot, len(obs.ego_ids)
         parts, owner = [], []  # owner -1: the leader's list (everyone)
-        if obs.detections is None:
-            if lead_row is not None and len(self.static):
-                near = np.hypot(*(self._static_c - snap.pos[lead_row]).T) - self._static_r <= self.p.sense_radius_m
+        if obs.detections is None:  # around the leader; once it has left, around every member
+            where = snap.pos[[lead_row]] if lead_row is not None else snap.pos[obs.ego_rows]
+            r = self.p.sense_radius_m
+            if len(self.static):
+                near = (np.hypot(*(self._static_c[:, None] - where[None]).transpose(2, 0, 1)).min(axis=1)
+                        - self._static_r <= r)
                 parts.append(self._static_polys[near])
                 owner += [-1] * int(near.sum())
             members = set(self.order)
             o = np.array([k for k, v in enumerate(snap.ids) if v not in members], int)
-            if lead_row is not None and len(o):
-                o = o[np.hypot(*(snap.pos[o] - snap.pos[lead_row]).T) <= self.p.sense_radius_m]
+            if len(o):
+                o = o[np.hypot(*(snap.pos[o][:, None] - where[None]).transpose(2, 0, 1)).min(axis=1) <= r]
                 parts.append(footprint_corners(snap.pos[o], snap.heading[o], snap.length[o], snap.width[o]))
                 owner += [-1] * len(o)
         else:

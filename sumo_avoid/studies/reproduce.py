@@ -25,6 +25,7 @@ from sumo_avoid.metrics.flocking import FlockingOrder
 from sumo_avoid.plots.arena import plot_arena
 from sumo_avoid.rollout import runner
 from sumo_avoid.scenario import spec as scenario
+from sumo_avoid.studies import formation_study
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]  # the checkout: sumo_avoid/studies/ -> ../..
 SPEEDS = (4, 6, 8)
@@ -133,8 +134,9 @@ def reproduce_table4(seeds: int = 20, agents: int = 100, duration: float = 600.0
 
 
 def add_parser(sub) -> None:
-    r = sub.add_parser("reproduce", help="reproduce a table of a seed paper inside SUMO (table4: flocking)")
-    r.add_argument("what", choices=["table4"])
+    r = sub.add_parser("reproduce", help="reproduce a seed paper's experiment inside SUMO (table4: flocking; "
+                                         "formation: fixed vs Lévy-tuned gains, docs/formation.md)")
+    r.add_argument("what", choices=["table4", "formation"])
     r.add_argument("--seeds", type=int, default=20, help="seeds per speed (default 20)")
     r.add_argument("--first-seed", type=int, default=1)
     r.add_argument("--agents", type=int, default=100, help="flock size N (default 100)")
@@ -142,11 +144,25 @@ def add_parser(sub) -> None:
     r.add_argument("--jobs", type=int, default=None, help="parallel processes (default: CPU count)")
     r.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a scenario value in all runs, e.g. controllers.flocking.speed_rule=cutoff")
-    r.add_argument("--out", type=pathlib.Path, default=None, help="output folder (default reports/table4)")
+    r.add_argument("--out", type=pathlib.Path, default=None, help="output folder (default reports/table4, "
+                                                                  "reports/formation)")
+    f = r.add_argument_group("formation")
+    f.add_argument("--tuned", type=pathlib.Path, default=ROOT / "reports" / "formation" / "tune" / "tuned.toml",
+                   help="tuned.toml of sumo-avoid tune (default reports/formation/tune/tuned.toml)")
+    f.add_argument("--runs", dest="seed_list", default="1-50", help="formation: seeds, e.g. 1-50 (default 1-50)")
+    f.add_argument("--obstacles", type=int, default=None, help="formation: random_obstacles.count (default: the "
+                                                               "scenarios' 40)")
+    f.add_argument("--scenarios", nargs="*", type=pathlib.Path, default=[], help="formation: scenario files "
+                                                                                 "(default the three goals)")
+    f.add_argument("--workers", type=int, default=None, help="formation: parallel runs (default: CPU count)")
+    f.add_argument("--scheduler", default=None, metavar="ADDRESS", help="formation: run on a Dask cluster")
     r.set_defaults(func=_cmd)
 
 
 def _cmd(args) -> int:
+    if args.what == "formation":
+        args.seeds, args.out = args.seed_list, args.out or ROOT / "reports" / "formation"
+        return formation_study.run(args)
     rows = reproduce_table4(args.seeds, args.agents, args.duration, args.out, args.jobs, args.overrides,
                             args.first_seed)
     for r in rows:

@@ -184,9 +184,13 @@ def cmd_tune(args) -> int:
     show = not args.quiet and sys.stderr.isatty()
     ev = Evaluator(args.scenario, seeds, sets, cfg, args.penalty, progress=False)
     t0 = time.perf_counter()
-    with tqdm(total=args.generations, unit="gen", disable=not show, file=sys.stderr) as bar:
-        cs, hist = tune(ev, args.generations, args.nests, args.seed, args.beta, args.pa, args.step,
-                        tuple(args.eta_at), tuple(args.eta_re), bar)
+    try:
+        with tqdm(total=args.generations, unit="gen", disable=not show, file=sys.stderr) as bar:
+            cs, hist = tune(ev, args.generations, args.nests, args.seed, args.beta, args.pa, args.step,
+                            tuple(args.eta_at), tuple(args.eta_re), bar)
+    except KeyboardInterrupt:
+        print("tune: interrupted; running runs killed; re-run the same command to resume", file=sys.stderr)
+        return 130
     best_u, best = cs.best
     (g_at, g_re), = gains(best_u[None], tuple(args.eta_at), tuple(args.eta_re))
     args.out.mkdir(parents=True, exist_ok=True)

@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import SCENARIOS, cli_in_process
 
 from sumo_avoid import outputs as evaluate
 from sumo_avoid.core.config import ScenarioError
 from sumo_avoid.rollout import runner
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.obstacles import RandomObstaclesConfig, draw
-from tests.conftest import SCENARIOS, cli_in_process
 
 GAP = SCENARIOS / "formation" / "gap.toml"
 ARENA = SCENARIOS / "formation" / "arena_g1.toml"

@@ -1,0 +1,97 @@
+"""``sumo-avoid tune formation``: the gain mapping and the score by hand, bad input as one line, and
+on real libsumo a tiny search that resumes after SIGKILL to the same result, and gives the same
+result on a Dask cluster."""
+from __future__ import annotations
+
+import contextlib
+import os
+import pathlib
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+
+import pandas as pd
+import pytest
+from conftest import cli_in_process
+
+from sumo_avoid.cli import main
+from sumo_avoid.studies import ledger
+from sumo_avoid.studies.tune import FAILED_SCORE, gains, score
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+GAP = ROOT / "scenarios" / "formation" / "gap.toml"
+TINY = ["--generations", "1", "--nests", "3", "--seeds", "2", "--set", "sim.duration_s=1", "--quiet"]
+
+
+def test_gains_are_log_uniform_with_six_digits():
+    g = gains([[0.0, 1.0], [0.5, 0.5], [1.0, 0.0]], (0.002, 0.2), (0.02, 2.0))
+    assert g == [(0.002, 2.0), (0.02, 0.2), (0.2, 0.02)]  # the log midpoint of 0.002..0.2 is 0.02
+    assert gains([[0.123456789, 0.0]], (1.0, 10.0), (1.0, 2.0))[0][0] == 1.32879  # 10^0.123456789 = e^(2.302585 x 0.123456789) = e^0.2842698 = 1.328794
+
+
+def test_score_means_penalised_runs_and_fails_high():
+    rows = pd.DataFrame({"status": ["done", "done", "failed"], "s_ef": [1.5, 1.0, None],
+                         "collisions": [0, 2, 0], "obstacle_hits": [1, 0, 0]})
+    assert score(rows, 0.5) == pytest.approx(((1.5 + 0.5) + (1.0 + 1.0) + FAILED_SCORE) / 3)
+
+
+@pytest.mark.parametrize("args, key", [
+    (["tune", "planner", GAP], "controller"),
+    (["tune", "formation", GAP, "--nests", "1"], "--nests"),
+    (["tune", "formation", GAP, "--beta", "2.5"], "--beta"),
+    (["tune", "formation", GAP, "--eta-at", "0.5", "0.1"], "--eta-at"),
+    (["tune", "formation", GAP, "--set", "controllers.formation.nope=1"], "controllers.formation.nope"),
+])
+def test_bad_tune_input_is_one_line(tmp_path, args, key):
+    r = cli_in_process(*args, "--out", tmp_path / "out")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and f"'{key}'" in r.stderr, r.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def _rows(db) -> int:
+    if not db.is_file():
+        return 0
+    with contextlib.closing(sqlite3.connect(db)) as con:
+        try:
+            return con.execute("SELECT count(*) FROM runs").fetchone()[0]
+        except sqlite3.OperationalError:
+            return 0
+
+
+def test_tuner_resumes_after_sigkill_and_runs_the_same_on_dask(tmp_path):
+    from dask.distributed import LocalCluster
+
+    a, b, c = tmp_path / "a", tmp_path / "b", tmp_path / "c"
+    assert main(["tune", "formation", str(GAP), *TINY, "--workers", "2", "--out", str(a)]) == 0
+    # 3 nests x 2 seeds initial, 3 x 2 Levy eggs, round(0.75) = 1 x 2 abandoned: 14 runs
+    assert _rows(a / "ledger.sqlite") == 14
+    cmd = [sys.executable, "-m", "sumo_avoid.cli", "tune", "formation", str(GAP), *TINY, "--workers", "2",
+           "--out", str(b)]
+    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            env={**os.environ, "CI": "true"})
+    try:
+        deadline = time.time() + 120
+        while _rows(b / "ledger.sqlite") < 4 and proc.poll() is None and time.time() < deadline:
+            time.sleep(0.05)
+        assert proc.poll() is None, "the tuner finished before it could be killed"
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+    finally:
+        proc.kill()
+    time.sleep(1.0)
+    before = ledger.row_hashes(b / "ledger.sqlite")
+    assert 4 <= len(before) < 14 and not (b / "tuned.toml").exists()
+    assert main(["tune", "formation", str(GAP), *TINY, "--workers", "2", "--out", str(b)]) == 0
+    after = ledger.row_hashes(b / "ledger.sqlite")
+    assert len(after) == 14 and all(after[k] == h for k, h in before.items())  # finished runs not re-run
+    assert (a / "tuned.toml").read_text() == (b / "tuned.toml").read_text()
+    assert (a / "history.csv").read_text() == (b / "history.csv").read_text()
+    assert (b / "convergence.png").stat().st_size > 10_000
+    with LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None,
+                      processes=True) as cluster:
+        assert main(["tune", "formation", str(GAP), *TINY, "--scheduler", cluster.scheduler_address,
+                     "--out", str(c)]) == 0
+    assert (a / "history.csv").read_text() == (c / "history.csv").read_text()
+    assert (a / "tuned.toml").read_text() == (c / "tuned.toml").read_text()
