@@ -52,7 +52,7 @@ from sumo_avoid.planning.radar_map import RadarMap, static_returns
 
 @dataclass(frozen=True)
 class GaPlannerParams(GaParams):
-    map_cell_m: float = field_doc(1.0, positive=True, doc="the obstacle map keeps one point per square of this side, m")
+    map_cell_m: float = field_doc(2.0, positive=True, doc="the obstacle map keeps one point per square of this side, m")
     shadow_depth_m: float = field_doc(6.0, doc="a return also marks the line of sight behind it this deep, m")
     shadow_step_m: float = field_doc(2.0, doc="spacing of those shadow points, m (0 = no shadow)")
     face_half_width_m: float = field_doc(3.0, doc="a return also marks its obstacle's face this far either side "

@@ -45,3 +45,10 @@ def test_pursuit_brakes_for_a_corner_ahead():
                          decel_mps2=3.0)
     # corner radius 5 / (2 sin 45 deg) = 3.5355 m, 20 m ahead: sqrt(2 * 3.5355 + 2 * 3 * 20) = 11.273
     assert v == pytest.approx([math.sqrt(2 * 5 / (2 * math.sin(math.pi / 4)) + 120.0), 0.0])
+
+
+def test_a_return_inside_an_earlier_shadow_is_remembered_as_a_return():
+    m = RadarMap(cell_m=2.0, shadow_depth_m=4.0, shadow_step_m=2.0, new_gap_m=4.0)
+    assert m.add([0.0, 0.0], [[10.0, 0.0]], 0.0)  # shadow at 12, 14
+    assert m.add([0.0, 0.0], [[14.5, 0.5]], 0.1)  # 4.5 m from the first return: new, though in its shadow's cell
+    assert not m.add([0.0, 0.0], [[14.5, 0.5]], 0.2)  # seen again: not new any more
