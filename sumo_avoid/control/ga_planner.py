@@ -98,6 +98,7 @@ class _Ego:
     s: float = 0.0
     last_plan_s: float = -np.inf
     pending: str = ""
+    truth: bool = False  # no radar (ego.sensor = "truth"): the scenario's obstacles, all known
     reverse_until_s: float = -np.inf
     reverse_turn: float = 0.0  # +1: back up turning the nose left, -1: right
     plans: list = field(default_factory=list)
@@ -169,10 +170,11 @@ class GaPlannerController:
 
     # --- planning ---------------------------------------------------------------------------
     def _points(self, st: _Ego) -> np.ndarray:
-        return st.map.points if len(st.map) else self.truth_points
+        return self.truth_points if st.truth else st.map.points
 
     def _trigger(self, st: _Ego, obs: Observation, vid: str, pos, t: float) -> str:
-        if obs.detections is not None:
+        st.truth = obs.detections is None
+        if not st.truth:
             pts, src = static_returns(obs, vid, self.p.static_speed_mps)
             if st.map.add(src, pts, t) and st.path is not None:
                 st.pending = st.pending or "new_obstacle"
