@@ -24,14 +24,6 @@ import numpy as np
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
-def seeds_of(text: str) -> list[int]:
-    out = []
-    for part in text.split(","):
-        a, _, b = part.partition("-")
-        out += list(range(int(a), int(b or a) + 1))
-    return out
-
-
 def main() -> None:
     from sumo_avoid.control.ga_planner import arena_bounds, rest_of
     from sumo_avoid.core.polyline import polyline_project
@@ -39,13 +31,14 @@ def main() -> None:
     from sumo_avoid.plots.planner import parse_path
     from sumo_avoid.rollout import runner
     from sumo_avoid.scenario import spec
+    from sumo_avoid.studies.batch import parse_seeds
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", default="1-5")
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args()
     in_run, replayed = [], []
-    for seed in seeds_of(args.seeds):
+    for seed in parse_seeds(args.seeds):
         scn = spec.load(ROOT / "scenarios" / "planner" / "field.toml", seed=seed)
         res = runner.run(scn)
         plans, rmap = res.tables["plans"], res.tables["radar_map"]
