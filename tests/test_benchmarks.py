@@ -79,4 +79,5 @@ def test_planner_benchmark_replays_every_plan_of_a_run():
     assert m, lines[-1]
     n = int(m.group(1))
     assert n >= 2 and 0 < float(m.group(2)) <= float(m.group(3)) <= float(m.group(4))
-    assert re.match(rf"^seed 1: {n} plans, in-run median", lines[0]) and lines[-2].startswith(f"in-run:   plans={n} ")
+    assert re.match(rf"^seed 1: {n} plans, in-run median", lines[0]) and lines[-3].startswith(f"in-run:   plans={n} ")
+    assert lines[-2].startswith(f"cpu:      plans={n} ")
