@@ -66,3 +66,11 @@ def test_without_radar_range_the_planner_knows_nothing():
     paths = [parse_path(p) for p in res.tables["plans"]["path"]]
     assert paths and all(crosses(p, res.scene.obstacles) for p in paths)
     assert m["goal_reached"] is False and m["radar_brakes"] >= 1
+
+
+def test_same_seed_same_plans_and_metrics():
+    runs = [run_scenario("planner/field", seed=2, overrides=["sim.duration_s=6"]) for _ in range(2)]
+    (ra, ma), (rb, mb) = runs
+    assert json.dumps(ma, sort_keys=True) == json.dumps(mb, sort_keys=True)
+    cols = ["time_s", "trigger", "generations", "generation_usable", "best_fitness", "path"]  # not plan_ms
+    assert ra.tables["plans"][cols].equals(rb.tables["plans"][cols]) and len(ra.tables["plans"]) >= 1
