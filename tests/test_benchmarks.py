@@ -68,3 +68,16 @@ def test_sumo_step_benchmark_compares_two_ways_of_driving_the_egos():
     assert m, out.stdout
     assert float(m.group(1)) > 0 and float(m.group(2)) > 0
     assert "steps: setspeed 6/6  move 6/6" in out.stderr
+
+
+def test_planner_benchmark_replays_every_plan_of_a_run():
+    out = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "planner.py"), "--seeds", "1", "--repeat", "1"], check=False,
+                         capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.strip().splitlines()
+    m = re.match(r"^plans=(\d+) median_ms=(\d+\.\d) p95_ms=(\d+\.\d) max_ms=(\d+\.\d)$", lines[-1])
+    assert m, lines[-1]
+    n = int(m.group(1))
+    assert n >= 2 and 0 < float(m.group(2)) <= float(m.group(3)) <= float(m.group(4))
+    assert re.match(rf"^seed 1: {n} plans, in-run median", lines[0]) and lines[-3].startswith(f"in-run:   plans={n} ")
+    assert lines[-2].startswith(f"cpu:      plans={n} ")

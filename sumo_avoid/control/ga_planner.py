@@ -20,10 +20,13 @@ warm-started from the rest of the previous best path. The path is tracked by pur
 heading); while the best path is not usable (closer than the safety radius to a known point) the
 speed is capped at ``unusable_speed_mps``. A governor stops the car ``stop_gap_m`` before any known
 point in the strip ahead of it (along its heading and its course), braking at
-``governor_decel_mps2``; stopped there, the car backs up for ``reverse_s``, nose turning towards the
-path, and plans again. The governor keeps the danger-time layer from having to brake: that layer
-holds full braking while anything is within twice its standstill gap ahead, and a car held
-stopped facing an obstacle could never turn away. The layers (danger time, rules) still act on
+``governor_decel_mps2``, and never faster than the distance from its front to the nearest known
+point within ``governor_cone_deg`` of the heading over ``governor_time_gap_s`` (the radar reveals an
+obstacle's face a piece at a time: slow near what is known, the rest is likely beside it); stopped there, the car backs up for ``reverse_s``, nose turning towards the
+path, and plans again. The governor keeps the danger-time layer from having to brake (its danger
+time stays above ``governor_time_gap_s`` > the layer's 1 s): that layer holds full braking while
+anything is within twice its standstill gap ahead, whatever the command, so a car it stopped
+facing an obstacle can never back away. The layers (danger time, rules) still act on
 the command.
 
 Each plan is logged (``plans.csv``: time, trigger, generations, generation of the first usable
@@ -46,13 +49,18 @@ from sumo_avoid.core.polyline import arc_lengths, polyline_project
 from sumo_avoid.core.types import EgoTask, Needs, Observation
 from sumo_avoid.planning import kernels
 from sumo_avoid.planning.ga import GaParams, clearance, plan
-from sumo_avoid.planning.pursuit import aim_angle, corridor_gap, pursuit_velocity
+from sumo_avoid.planning.pursuit import (
+    aim_angle,
+    cone_gap,
+    corridor_gap,
+    pursuit_velocity,
+)
 from sumo_avoid.planning.radar_map import RadarMap, static_returns
 
 
 @dataclass(frozen=True)
 class GaPlannerParams(GaParams):
-    map_cell_m: float = field_doc(1.0, positive=True, doc="the obstacle map keeps one point per square of this side, m")
+    map_cell_m: float = field_doc(2.0, positive=True, doc="the obstacle map keeps one point per square of this side, m")
     shadow_depth_m: float = field_doc(6.0, doc="a return also marks the line of sight behind it this deep, m")
     shadow_step_m: float = field_doc(2.0, doc="spacing of those shadow points, m (0 = no shadow)")
     face_half_width_m: float = field_doc(3.0, doc="a return also marks its obstacle's face this far either side "
@@ -72,6 +80,10 @@ class GaPlannerParams(GaParams):
     max_course_deg: float = field_doc(80.0, doc="forward, the commanded direction stays within this angle of the heading, deg")
     stop_gap_m: float = field_doc(4.5, doc="governor: stop this far before a known obstacle point in the strip ahead, m")
     governor_decel_mps2: float = field_doc(2.0, doc="governor: braking it plans with, m/s^2")
+    governor_time_gap_s: float = field_doc(1.5, positive=True, doc="governor: at most the distance from the front to "
+                                                                    "the nearest known point in the cone ahead / this, s")
+    governor_cone_deg: float = field_doc(35.0, doc="governor: the time gap counts known points within this angle "
+                                                   "of the heading (unseen parts of an obstacle lie beside its seen ones), deg")
     corridor_margin_m: float = field_doc(1.0, doc="governor: the strip ahead is the car's width plus this either side, m")
     reverse_s: float = field_doc(3.0, doc="a car stopped by the governor facing away from its path backs up this long, s")
     reverse_speed_mps: float = field_doc(1.5, doc="speed of that manoeuvre, m/s")
@@ -86,6 +98,7 @@ class _Ego:
     s: float = 0.0
     last_plan_s: float = -np.inf
     pending: str = ""
+    truth: bool = False  # no radar (ego.sensor = "truth"): the scenario's obstacles, all known
     reverse_until_s: float = -np.inf
     reverse_turn: float = 0.0  # +1: back up turning the nose left, -1: right
     plans: list = field(default_factory=list)
@@ -157,10 +170,11 @@ class GaPlannerController:
 
     # --- planning ---------------------------------------------------------------------------
     def _points(self, st: _Ego) -> np.ndarray:
-        return st.map.points if len(st.map) else self.truth_points
+        return self.truth_points if st.truth else st.map.points
 
     def _trigger(self, st: _Ego, obs: Observation, vid: str, pos, t: float) -> str:
-        if obs.detections is not None:
+        st.truth = obs.detections is None
+        if not st.truth:
             pts, src = static_returns(obs, vid, self.p.static_speed_mps)
             if st.map.add(src, pts, t) and st.path is not None:
                 st.pending = st.pending or "new_obstacle"
@@ -218,8 +232,10 @@ class GaPlannerController:
         course = heading + float(np.clip(alpha, -np.radians(p.max_course_deg), np.radians(p.max_course_deg)))
         gap = min(corridor_gap(self._points(st), pos, h, 0.5 * length, 0.5 * width + p.corridor_margin_m)
                   for h in (heading, course))
-        v_gov = np.sqrt(2.0 * p.governor_decel_mps2 * max(gap - p.stop_gap_m, 0.0))
-        if v_gov < 0.5 and abs(speed) < 0.3:  # blocked: back up, then plan again from there
+        v_stop = np.sqrt(2.0 * p.governor_decel_mps2 * max(gap - p.stop_gap_m, 0.0))
+        near = cone_gap(self._points(st), pos, heading, 0.5 * length, np.radians(p.governor_cone_deg))
+        v_gov = min(v_stop, near / p.governor_time_gap_s)
+        if v_stop < 0.5 and abs(speed) < 0.3:  # blocked: back up, then plan again from there
             st.reverse_until_s, st.reverse_turn = t + p.reverse_s, 1.0 if alpha >= 0 else -1.0
             st.pending = "blocked"
             self.reversals += 1

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sumo_avoid.core.config import field_doc
+from sumo_avoid.core.config import FieldError, field_doc
 from sumo_avoid.planning import kernels
 
 
@@ -40,8 +40,8 @@ from sumo_avoid.planning import kernels
 class GaParams:
     waypoints: int = field_doc(8, doc="n, waypoints per path including start and goal (>= 3)")
     population: int = field_doc(40, doc="paths per generation (>= 4)")
-    generations: int = field_doc(40, doc="most generations per plan")
-    patience: int = field_doc(6, doc="a plan stops once its best path is usable and unchanged for this many generations")
+    generations: int = field_doc(30, doc="most generations per plan")
+    patience: int = field_doc(5, doc="a plan stops once its best path is usable and unchanged for this many generations")
     elite: int = field_doc(2, doc="best paths carried over unchanged into the next generation")
     w_length: float = field_doc(1.0, doc="w_L, weight of length()")
     w_obstacle: float = field_doc(8.0, doc="w_o, weight of obstacle()")
@@ -60,15 +60,15 @@ class GaParams:
                                                "start-goal line, m")
 
     def __post_init__(self):
-        if self.waypoints < 3 or self.population < 4 or self.generations < 1:
-            raise ValueError("waypoints >= 3, population >= 4, generations >= 1")
-        if not 0 <= self.elite < self.population:
-            raise ValueError("0 <= elite < population")
-        if self.smooth_threshold <= 1.0:
-            raise ValueError("smooth_threshold > 1")
-        for name in ("crossover_prob", "mutation_threshold", "regression_prob", "regression_rate"):
-            if not 0.0 <= getattr(self, name) <= 1.0:
-                raise ValueError(f"0 <= {name} <= 1")
+        for key, ok, what in (("waypoints", self.waypoints >= 3, "an integer >= 3"),
+                              ("population", self.population >= 4, "an integer >= 4"),
+                              ("generations", self.generations >= 1, "an integer >= 1"),
+                              ("elite", self.elite < self.population, "an integer below population"),
+                              ("smooth_threshold", self.smooth_threshold > 1.0, "a number > 1"),
+                              *((k, getattr(self, k) <= 1.0, "a number in [0, 1]") for k in
+                                ("crossover_prob", "mutation_threshold", "regression_prob", "regression_rate"))):
+            if not ok:
+                raise FieldError(key, what, getattr(self, key))
 
 
 # ------------------------------------------------------------------------------------------------
@@ -79,13 +79,23 @@ def path_lengths(pop) -> np.ndarray:
     return np.hypot(*np.diff(pop, axis=1).transpose(2, 0, 1)).sum(axis=1)
 
 
+def sorted_points(points) -> np.ndarray:
+    """Obstacle points (P, 2) sorted by x, contiguous: the form the clearance kernel reads."""
+    pts = np.asarray(points, float).reshape(-1, 2)
+    return np.ascontiguousarray(pts[np.argsort(pts[:, 0], kind="stable")])
+
+
+def _clearances(pop, pts):
+    """(first segment (N,), other segments (N,)) clearances; ``pts`` from :func:`sorted_points`."""
+    pop = np.ascontiguousarray(pop, float)
+    if len(pts) == 0:
+        return np.full(len(pop), np.inf), np.full(len(pop), np.inf)
+    return kernels.clearance(pop, pts)
+
+
 def clearance(pop, points) -> np.ndarray:
     """(N,) smallest distance from any segment of each path to any obstacle point, m (inf: no points)."""
-    pop = np.ascontiguousarray(pop, float)
-    pts = np.asarray(points, float).reshape(-1, 2)
-    if len(pts) == 0:
-        return np.full(len(pop), np.inf)
-    return kernels.clearance(pop, np.ascontiguousarray(pts[np.argsort(pts[:, 0], kind="stable")]))
+    return np.minimum(*_clearances(pop, sorted_points(points)))
 
 
 def obstacle_term(clear, radar_range_m: float) -> np.ndarray:
@@ -118,14 +128,13 @@ def fitness(pop, points, p: GaParams):
     return fitness_of(pop, c, p), c
 
 
-def violation(pop, points, radius_m: float, first_radius_m: float):
+def violation(pop, points, radius_m: float, first_radius_m: float, presorted: bool = False):
     """(clearance (N,), violation (N,)): how far each path falls short of being usable, m (0 = usable):
     its first segment must keep ``first_radius_m`` from every point, the others ``radius_m``. (The
     ego may already be closer than the safety radius to a point it has just discovered; every path
-    starts there, so the first segment asks only that the ego not get closer.)"""
-    pop = np.asarray(pop, float)
-    c1 = clearance(pop[:, :2], points)
-    c2 = clearance(pop[:, 1:], points)
+    starts there, so the first segment asks only that the ego not get closer.) ``presorted``:
+    ``points`` come from :func:`sorted_points`."""
+    c1, c2 = _clearances(pop, points if presorted else sorted_points(points))
     return np.minimum(c1, c2), np.maximum(np.maximum(radius_m - c2, first_radius_m - c1), 0.0)
 
 
@@ -148,7 +157,8 @@ def mutate(pop, draws, steps, threshold: float):
     return out
 
 
-def regress(pop, points, rate: float, safety_radius_m: float, first_radius_m: float | None = None):
+def regress(pop, points, rate: float, safety_radius_m: float, first_radius_m: float | None = None,
+            presorted: bool = False):
     """Pull every inner waypoint ``rate`` of the way towards its foot on the straight start-goal
     segment; a path keeps the move only if it stays usable (:func:`violation` 0; by default the
     first segment too needs ``safety_radius_m``). Returns (paths, moved (N,) bool)."""
@@ -161,7 +171,7 @@ def regress(pop, points, rate: float, safety_radius_m: float, first_radius_m: fl
     cand = pop + rate * (foot - pop)
     cand[:, [0, -1]] = pop[:, [0, -1]]
     first = safety_radius_m if first_radius_m is None else first_radius_m
-    ok = violation(cand, points, safety_radius_m, first)[1] <= 0.0
+    ok = violation(cand, points, safety_radius_m, first, presorted)[1] <= 0.0
     return np.where(ok[:, None, None], cand, pop), ok
 
 
@@ -234,6 +244,8 @@ def _ranking(f, v):
 
 
 def next_generation(pop, order, p: GaParams, points, rng: np.random.Generator, bounds, first_radius_m) -> np.ndarray:
+    """Elites, then offspring of tournament parents: crossover, mutation, regression, smoothing
+    (``points`` from :func:`sorted_points`)."""
     N, n = pop.shape[:2]
     rank = np.empty(N, int)
     rank[order] = np.arange(N)
@@ -252,14 +264,14 @@ def next_generation(pop, order, p: GaParams, points, rng: np.random.Generator, b
     off = clip(off, bounds)
     offer = rng.random(kids) < p.regression_prob
     if offer.any():
-        off[offer] = regress(off[offer], points, p.regression_rate, p.safety_radius_m, first_radius_m)[0]
+        off[offer] = regress(off[offer], points, p.regression_rate, p.safety_radius_m, first_radius_m, True)[0]
     off = smooth(off, p.smooth_threshold)
     return np.concatenate([pop[order[:p.elite]], off])
 
 
 def plan(start, goal, points, p: GaParams, rng: np.random.Generator, bounds=None, warm=None) -> Plan:
     """Run the GA from ``start`` to ``goal`` around obstacle ``points`` (P, 2)."""
-    points = np.asarray(points, float).reshape(-1, 2)
+    points = sorted_points(points)
     r = p.safety_radius_m
     d0 = float(np.hypot(*(points - np.asarray(start, float)).T).min()) if len(points) else np.inf
     first = min(r, d0 - 0.01)
@@ -268,7 +280,7 @@ def plan(start, goal, points, p: GaParams, rng: np.random.Generator, bounds=None
     usable_at = None
     best, same = None, 0
     for gen in range(p.generations + 1):
-        c, v = violation(pop, points, r, first)
+        c, v = violation(pop, points, r, first, presorted=True)
         f = fitness_of(pop, c, p)
         order = _ranking(f, v)
         top = order[0]

@@ -14,33 +14,43 @@ from numba import njit
 
 
 @njit(cache=True, error_model="numpy")
-def clearance(pop, pts):
-    """(N,) smallest distance from any segment of each path pop[k] (n, 2) to any point pts (P, 2), m.
-
-    ``pts`` must be sorted by x: a segment only looks at the points whose x lies within the
-    path's best distance so far of its own x extent (exact: the others are farther)."""
-    N, n = pop.shape[0], pop.shape[1]
-    out = np.full(N, np.inf)
+def _segment_min(ax, ay, bx, by, pts, best):
+    """Smallest squared distance below ``best`` from segment (ax, ay) + t (bx, by) to the points
+    (sorted by x: only those within sqrt(best) of the segment's x extent are looked at)."""
     xs = pts[:, 0]
+    den = bx * bx + by * by
+    reach = np.sqrt(best)
+    lo = np.searchsorted(xs, min(ax, ax + bx) - reach)
+    hi = np.searchsorted(xs, max(ax, ax + bx) + reach, side="right")
+    for j in range(lo, hi):
+        px, py = pts[j, 0] - ax, pts[j, 1] - ay
+        t = 0.0
+        if den > 0.0:
+            t = min(max((px * bx + py * by) / den, 0.0), 1.0)
+        gx, gy = px - t * bx, py - t * by
+        best = min(best, gx * gx + gy * gy)
+    return best
+
+
+@njit(cache=True, error_model="numpy")
+def clearance(pop, pts):
+    """(first (N,), rest (N,)): for each path pop[k] (n, 2), the smallest distance from its first
+    segment, and from its other segments (inf if none), to any point of ``pts`` (P, 2), m.
+
+    ``pts`` must be sorted by x: a segment only looks at the points whose x lies within the best
+    distance so far of its own x extent (exact: the others are farther)."""
+    N, n = pop.shape[0], pop.shape[1]
+    first = np.empty(N)
+    rest = np.empty(N)
     for k in range(N):
+        first[k] = np.sqrt(_segment_min(pop[k, 0, 0], pop[k, 0, 1], pop[k, 1, 0] - pop[k, 0, 0],
+                                        pop[k, 1, 1] - pop[k, 0, 1], pts, np.inf))
         best = np.inf
-        for i in range(n - 1):
-            ax, ay = pop[k, i, 0], pop[k, i, 1]
-            bx, by = pop[k, i + 1, 0] - ax, pop[k, i + 1, 1] - ay
-            den = bx * bx + by * by
-            reach = np.sqrt(best)
-            lo = np.searchsorted(xs, min(ax, ax + bx) - reach)
-            hi = np.searchsorted(xs, max(ax, ax + bx) + reach, side="right")
-            for j in range(lo, hi):
-                px, py = pts[j, 0] - ax, pts[j, 1] - ay
-                t = 0.0
-                if den > 0.0:
-                    t = min(max((px * bx + py * by) / den, 0.0), 1.0)
-                gx, gy = px - t * bx, py - t * by
-                d2 = gx * gx + gy * gy
-                best = min(best, d2)
-        out[k] = np.sqrt(best)
-    return out
+        for i in range(1, n - 1):
+            best = _segment_min(pop[k, i, 0], pop[k, i, 1], pop[k, i + 1, 0] - pop[k, i, 0],
+                                pop[k, i + 1, 1] - pop[k, i, 1], pts, best)
+        rest[k] = np.sqrt(best)
+    return first, rest
 
 
 @njit(cache=True, error_model="numpy")

@@ -40,6 +40,15 @@ def corridor_gap(points, pos, heading: float, half_length_m: float, half_width_m
     return float(np.maximum(x[ahead], 0.0).min(initial=np.inf))
 
 
+def cone_gap(points, pos, heading: float, half_length_m: float, half_angle_rad: float) -> float:
+    """Distance from the front of a car to the nearest of ``points`` within ``half_angle_rad`` of
+    its heading (seen from its centre), m (inf: none)."""
+    rel = np.asarray(points, float).reshape(-1, 2) - np.asarray(pos, float)
+    d = np.hypot(rel[:, 0], rel[:, 1])
+    bearing = np.abs(wrap_angle(np.arctan2(rel[:, 1], rel[:, 0]) - heading))
+    return float(np.maximum(d[bearing <= half_angle_rad] - half_length_m, 0.0).min(initial=np.inf))
+
+
 def pursuit_velocity(path, s_ego: float, pos, heading: float, cruise_mps: float, lookahead_m: float,
                      lat_accel_mps2: float, decel_mps2: float, max_course_rad: float = np.pi) -> np.ndarray:
     """(2,) desired velocity for a car at ``pos`` (arc length ``s_ego`` on ``path``) with ``heading``.

@@ -32,7 +32,8 @@ class RadarMap:
         self.new_gap_m = new_gap_m
         self._cells: set[int] = set()
         self._points: list[np.ndarray] = []
-        self._returns = np.zeros((0, 2))  # every return kept (not its shadow): the new-obstacle test
+        self._returns = np.zeros((0, 2))  # one return per cell (not their shadows): the new-obstacle test
+        self._return_cells: set[int] = set()
         self.rows: list[tuple] = []  # (time_s, x, y, is_return) of each kept point
 
     @property
@@ -59,15 +60,19 @@ class RadarMap:
         is_ret = np.arange(len(pts)) < len(ret)
         ij = np.floor(pts / self.cell_m).astype(np.int64)
         keys = ij[:, 0] * _KEY + ij[:, 1]
-        keep = []
+        keep, seen = [], []
         for k, key in enumerate(keys.tolist()):  # a few dozen per scan
             if key not in self._cells:
                 self._cells.add(key)
                 keep.append(k)
+            if k < len(ret) and key not in self._return_cells:  # a return where a shadow was is still a return
+                self._return_cells.add(key)
+                seen.append(k)
         if keep:
             self._points.append(pts[keep])
             self.rows.extend((time_s, float(x), float(y), bool(r)) for (x, y), r in zip(pts[keep], is_ret[keep]))
-            self._returns = np.concatenate([self._returns, pts[keep][is_ret[keep]]])
+        if seen:
+            self._returns = np.concatenate([self._returns, ret[seen]])
         return new
 
 

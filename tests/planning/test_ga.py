@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import SCENARIOS, cli_in_process
 
 from sumo_avoid.planning import ga
 
@@ -154,3 +155,14 @@ def test_a_plan_is_deterministic_and_gets_round_a_wall():
 def test_resample_keeps_ends_and_spaces_evenly():
     out = ga.resample([[0, 0], [10, 0], [10, 10]], 5)
     assert out.tolist() == [[0, 0], [5, 0], [10, 0], [10, 5], [10, 10]]
+
+
+@pytest.mark.parametrize("key, value, expected", [("waypoints", 2, "an integer >= 3"),
+                                                  ("mutation_threshold", 1.5, "a number in [0, 1]"),
+                                                  ("smooth_threshold", 1.0, "a number > 1")])
+def test_bad_planner_parameters_are_one_line_errors(tmp_path, key, value, expected):
+    r = cli_in_process("run", SCENARIOS / "planner" / "field.toml", "--set", f"controllers.ga_planner.{key}={value}",
+                       "--out", tmp_path / "o")
+    assert r.returncode == 2 and not (tmp_path / "o").exists()
+    assert f"key 'controllers.ga_planner.{key}': expected {expected}, got {value}" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1

@@ -5,7 +5,12 @@ import math
 import numpy as np
 import pytest
 
-from sumo_avoid.planning.pursuit import corner_angles, pursuit_velocity
+from sumo_avoid.planning.pursuit import (
+    cone_gap,
+    corner_angles,
+    corridor_gap,
+    pursuit_velocity,
+)
 from sumo_avoid.planning.radar_map import RadarMap
 
 
@@ -45,3 +50,22 @@ def test_pursuit_brakes_for_a_corner_ahead():
                          decel_mps2=3.0)
     # corner radius 5 / (2 sin 45 deg) = 3.5355 m, 20 m ahead: sqrt(2 * 3.5355 + 2 * 3 * 20) = 11.273
     assert v == pytest.approx([math.sqrt(2 * 5 / (2 * math.sin(math.pi / 4)) + 120.0), 0.0])
+
+
+def test_a_return_inside_an_earlier_shadow_is_remembered_as_a_return():
+    m = RadarMap(cell_m=2.0, shadow_depth_m=4.0, shadow_step_m=2.0, new_gap_m=4.0)
+    assert m.add([0.0, 0.0], [[10.0, 0.0]], 0.0)  # shadow at 12, 14
+    assert m.add([0.0, 0.0], [[14.5, 0.5]], 0.1)  # 4.5 m from the first return: new, though in its shadow's cell
+    assert not m.add([0.0, 0.0], [[14.5, 0.5]], 0.2)  # seen again: not new any more
+
+
+def test_governor_gaps_ahead_of_the_front_bumper():
+    pts = np.array([[10.0, 1.0], [6.0, 3.0], [-5.0, 0.0]])  # car at the origin heading +x, 4 m long
+    # strip 1.5 m either side: only (10, 1): 10 - 2 = 8 m from the front; (6, 3) is 3 m off the axis
+    assert corridor_gap(pts, [0.0, 0.0], 0.0, 2.0, 1.5) == pytest.approx(8.0)
+    assert corridor_gap(pts, [0.0, 0.0], 0.0, 2.0, 3.5) == pytest.approx(4.0)
+    assert corridor_gap(pts, [0.0, 0.0], math.pi, 2.0, 1.5) == pytest.approx(3.0)  # facing back: (-5, 0)
+    # cone of 30 deg: (10, 1) at 5.7 deg, hypot(10, 1) - 2; (6, 3) at 26.6 deg, hypot(6, 3) - 2 = 4.708
+    assert cone_gap(pts, [0.0, 0.0], 0.0, 2.0, math.radians(30)) == pytest.approx(math.hypot(6, 3) - 2)
+    assert cone_gap(pts, [0.0, 0.0], 0.0, 2.0, math.radians(20)) == pytest.approx(math.hypot(10, 1) - 2)
+    assert cone_gap(np.zeros((0, 2)), [0.0, 0.0], 0.0, 2.0, 1.0) == math.inf
