@@ -1,7 +1,7 @@
 """Build the generated-network suite: 24 nets from SUMO's netgenerate, traffic from randomTrips.py, an ego
 route through >= 3 junctions per net, a scenario file per net and the suite scenarios/generated.toml.
 
-Usage:  python scenarios/generated/make.py              rebuild everything (about a minute)
+Usage:  python scenarios/generated/make.py              rebuild everything (35 s on the shared 2-core machine)
         python scenarios/generated/make.py --check      rebuild into a temporary folder, compare byte for byte
         python scenarios/generated/make.py --only grid02 --out DIR
 

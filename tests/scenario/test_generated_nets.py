@@ -6,6 +6,7 @@ import pathlib
 import sys
 import xml.etree.ElementTree as ET
 
+import pytest
 import sumolib
 
 from sumo_avoid.scenario import spec as scenario
@@ -29,6 +30,7 @@ def _intersections(net, edge_ids) -> list[str]:
     return out
 
 
+@pytest.mark.sumo  # runs SUMO's netgenerate, netconvert, randomTrips.py and duarouter
 def test_a_generated_net_rebuilds_byte_identical_with_an_ego_route_through_3_junctions(tmp_path):
     name = "spider01"  # the spider net whose inner circle becomes a roundabout (netgenerate + netconvert pass)
     make.build_one(name, tmp_path)

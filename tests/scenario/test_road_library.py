@@ -52,6 +52,7 @@ def _bend_radii(shape, min_turn_rad: float = 1e-3) -> list[float]:
     return radii
 
 
+@pytest.mark.sumo  # runs SUMO's netconvert and netgenerate
 def test_committed_nets_are_what_the_sources_build(tmp_path):
     names = build.names()
     assert len(names) == 7
