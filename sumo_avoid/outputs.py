@@ -14,8 +14,8 @@ import pandas as pd
 from sumo_avoid.metrics import clean, compute
 from sumo_avoid.metrics.series import series
 from sumo_avoid.plots.arena import plot_arena
-from sumo_avoid.plots.planner import plot_convergence, plot_plans
 from sumo_avoid.plots.formation import plot_formation
+from sumo_avoid.plots.planner import plot_convergence, plot_plans
 from sumo_avoid.plots.trajectories import plot_timeseries, plot_trajectories
 from sumo_avoid.rollout.assemble import metric_names
 from sumo_avoid.rollout.result import RunResult

@@ -43,7 +43,6 @@ from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.geometry import (
     convex_distance,
     footprint_corners,
-    point_segment_distance,
 )
 from sumo_avoid.core.types import EgoTask, Needs, Observation
 

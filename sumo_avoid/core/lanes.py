@@ -17,7 +17,6 @@ import numpy as np
 
 from sumo_avoid.core.types import LanePiece
 
-
 #: Lanes that do not continue the route narrow down to the route's lane over this length, m.
 TAPER_M = 30.0
 #: Inside a junction the route's internal lane is widened by this much on each side, m.

@@ -15,7 +15,6 @@ import sys
 import time
 
 import pytest
-
 from conftest import cli_in_process
 
 from sumo_avoid.cli import main
