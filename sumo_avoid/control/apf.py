@@ -132,6 +132,9 @@ class ApfController:
     def stats(self) -> dict:
         return {}
 
+    def tables(self) -> dict:
+        return {}
+
     # --- targets (Frenet) ------------------------------------------------------------------
     def lookahead(self, speed: float) -> float:
         return max(self.p.lookahead_min_m, self.p.lookahead_time_s * abs(speed))

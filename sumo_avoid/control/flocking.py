@@ -295,6 +295,9 @@ class FlockingController:
     def stats(self) -> dict:
         return {"flocking_updates": self.updates}
 
+    def tables(self) -> dict:
+        return {}
+
     def v2v_params(self) -> V2VParams:
         """The V2V link this flock talks over (delay, noise, GPS error: [controllers.flocking] keys)."""
         p = self.p

@@ -188,6 +188,9 @@ class FormationController:
         return {"formation_kappa_steps": list(self.kappa_steps), "formation_mode_log": self.log,
                 "formation_min_gamma": float(self.gamma_min_seen) if np.isfinite(self.gamma_min_seen) else None}
 
+    def tables(self) -> dict:
+        return {}
+
     # --- obstacles -------------------------------------------------------------------------------
     def _obstacles(self, obs: Observation, lead_row, member_pos):
         """(polys (O,K,2), mask (E,O) which ego feels which, leader's (O,) bool). The leader's list is

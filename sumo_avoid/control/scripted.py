@@ -64,3 +64,6 @@ class ScriptedController:
 
     def stats(self) -> dict:
         return {}
+
+    def tables(self) -> dict:
+        return {}

@@ -62,6 +62,9 @@ class Controller(EgoAware, Protocol):
     def act(self, obs: Observation) -> np.ndarray:  # (E, 2) desired velocity, m/s
         ...
 
+    def tables(self) -> dict:  # name -> pandas DataFrame written as NAME.csv (ga_planner's plan log); {} if none
+        ...
+
 
 class Layer(EgoAware, Protocol):
     """Between controller and actuator: limits (or only watches) the command."""

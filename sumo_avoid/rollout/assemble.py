@@ -51,8 +51,8 @@ class Stack:
         return out
 
     def tables(self) -> dict:
-        """The sensor's tables and those of a controller that writes some (ga_planner's plan log)."""
-        return {**self.sensor.tables(), **getattr(self.controller, "tables", dict)()}
+        """The sensor's tables and the controller's (ga_planner's plan log)."""
+        return {**self.sensor.tables(), **self.controller.tables()}
 
 
 def controller_for(scn, ctx: Context) -> Controller:

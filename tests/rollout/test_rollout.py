@@ -50,6 +50,9 @@ class ToyController:
     def stats(self):
         return {"toy_steps": len(self.seen)}
 
+    def tables(self):
+        return {}
+
     def act(self, obs):
         self.seen.append(obs.ego_ids)
         return np.array([self.p.speed_mps * self.dirs[v] for v in obs.ego_ids]).reshape(-1, 2)
