@@ -65,6 +65,11 @@ class ApfParams:
     gov_decel_mps2: float = field_doc(4.0, doc="speed governor: braking it plans with, m/s^2")
     gov_standstill_m: float = field_doc(2.0, doc="speed governor: gap kept at standstill, m")
     gov_margin_m: float = field_doc(0.4, doc="speed governor: lateral margin of the corridor ahead, m")
+    squeeze_speed_mps: float = field_doc(2.0, doc="speed past a standing vehicle in the governor's strip that the "
+                                         "ego can steer clear of (and of such a vehicle), m/s")
+    squeeze_closing_mps: float = field_doc(0.2, doc="such a vehicle closing across the road faster than this "
+                                           "blocks the strip instead, m/s")
+    squeeze_clear_m: float = field_doc(0.1, doc="lateral clearance the ego must be able to reach to pass it, m")
     max_course_deg: float = field_doc(35.0, doc="moving forward, the commanded direction stays within this angle of the road's, deg")
     max_lat_speed_mps: float = field_doc(1.5, doc="moving forward, the commanded speed across the road stays below this, m/s")
     curve_lat_accel_mps2: float = field_doc(2.5, doc="speed for the road ahead: lateral acceleration in bends, m/s^2")
@@ -179,17 +184,22 @@ class ApfController:
             # a vehicle beside the ego's lane strip (no overlap across the road, e.g. oncoming in
             # its own lane, or slower in the next lane) is felt from its closing speed across the
             # road only: passing it is no threat, drifting towards it is
+            # road; a standing one the ego can steer clear of in time within its lanes is passed the
+            # same way, at a crawl (_squeeze, the governor)
             e_lo, e_hi = np.repeat(ego_corners[..., 1].min(1), O), np.repeat(ego_corners[..., 1].max(1), O)
             o_lo, o_hi = np.tile(oc[..., 1].min(1), C), np.tile(oc[..., 1].max(1), C)
-            beside = (e_lo - p.gov_margin_m > o_hi) | (e_hi + p.gov_margin_m < o_lo)
             side = np.sign(np.tile(sc.o_pos[:, 1], C) - np.repeat(q_cand[:, 1], O))
-            closing = np.where(beside, np.maximum(v_rel[:, 1] * side, 0.0), closing)
+            lat_closing = np.maximum(v_rel[:, 1] * side, 0.0)
+            beside = (e_lo - p.gov_margin_m > o_hi) | (e_hi + p.gov_margin_m < o_lo)
+            squeeze = ~beside & self._squeeze(sc, q_cand, oc, side, lat_closing)
+            beside = beside | squeeze
+            closing = np.where(beside, lat_closing, closing)
             rho0 = p.rho0_min_m + cos_phi * (closing**2 / (2 * p.rho0_decel_mps2) + p.rho0_headway_s * np.hypot(*v_ego))
             Ur, Fr = repulsion(rho, away, rho0, p.k_rep)
             Fr[:, 0] = np.where(beside, 0.0, Fr[:, 0])  # ... and pushes only across it, never back
             U = U + Ur.reshape(C, O).sum(axis=1)
             F = F + Fr.reshape(C, O, 2).sum(axis=1)
-            v_safe = self._governor(q_cand[0], hd, L, W, oc, sc.o_vel)
+            v_safe = self._governor(q_cand[0], hd, L, W, oc, sc.o_vel, squeeze[:O])
 
         # the bounds of the ego's lanes, one line on each side, repel across the road (always
         # inwards: a car past a bound is pushed back, never further out) from the footprint's
@@ -207,19 +217,47 @@ class ApfController:
             U, F = U + Ur, F + Fr
         return Field(U, F, float(v_safe))
 
-    def _governor(self, q, hd, L, W, corners, vel) -> float:
+    def _squeeze(self, sc: FrenetScene, q_cand, oc, side, lat_closing) -> np.ndarray:
+        """(C*O,) bool: the vehicle stands (or crawls) and does not close across the road, and the
+        ego, taken as aligned with the road (like for the bounds: a heading turned away from the
+        vehicle must not make its rear corner count), clears it with ``squeeze_clear_m`` by a small
+        sideways shift (<= ``gov_margin_m``) that keeps it in its lanes and that it can make before
+        reaching it (shift <= gap ahead x tan(max_course)).
+        Such a vehicle is passed at a crawl while its push widens the gap: a car waiting at the
+        oncoming lane's stop line with its nose turned in, 0.55 m ahead of the ego's corner and 0.14 m
+        to its side, had stopped the ego for good inside a junction while it waited for the ego
+        (netgenerate spider net with randomTrips traffic)."""
+        p, C, O, L = self.p, len(q_cand), len(sc.o_pos), sc.length
+        qs, qd = np.repeat(q_cand[:, 0], O), np.repeat(q_cand[:, 1], O)
+        e_lo, e_hi = qd - 0.5 * sc.width, qd + 0.5 * sc.width
+        o_lo, o_hi = np.tile(oc[..., 1].min(1), C), np.tile(oc[..., 1].max(1), C)
+        shift = np.where(side > 0, e_hi - o_lo, o_hi - e_lo) + p.squeeze_clear_m
+        lo, hi = sc.corridor(q_cand[:, 0])
+        room = np.where(side > 0, e_lo - shift >= np.repeat(lo, O), e_hi + shift <= np.repeat(hi, O))
+        gap = np.tile(oc[..., 0].min(1), C) - (qs + 0.5 * L)
+        in_time = (shift <= 0.0) | (shift <= np.maximum(gap, 0.0) * np.tan(self.max_course))
+        slow = np.tile(np.hypot(*sc.o_vel.T), C) <= p.squeeze_speed_mps
+        small = shift <= p.gov_margin_m  # it reaches at most gov_margin - clear into the ego's strip: the
+        # shifted ego needs no check against the others (their own pushes keep it off them)
+        return slow & small & (lat_closing <= p.squeeze_closing_mps) & room & in_time
+
+    def _governor(self, q, hd, L, W, corners, vel, squeeze) -> float:
+        """The speed from which the ego stops behind anything in its strip ahead (``squeeze``
+        (O,) bool: vehicles passed at ``squeeze_speed_mps`` instead)."""
         nd = np.array([-hd[1], hd[0]])
         rel = corners - q
         x = rel @ hd  # (O,4)
         y = rel @ nd
         half = 0.5 * W + self.p.gov_margin_m
         ahead = (y.max(axis=1) >= -half) & (y.min(axis=1) <= half) & (x.max(axis=1) > 0.5 * L)
+        v_squeeze = self.p.squeeze_speed_mps if (ahead & squeeze).any() else np.inf
+        ahead &= ~squeeze
         if not ahead.any():
-            return np.inf
+            return v_squeeze
         gap = np.maximum(x[ahead].min(axis=1) - 0.5 * L, 0.0)
         v_lead = np.maximum(vel[ahead] @ hd, 0.0)
         free = np.maximum(gap - self.p.gov_standstill_m, 0.0)
-        return float(np.sqrt(v_lead**2 + 2.0 * self.p.gov_decel_mps2 * free).min())
+        return float(min(np.sqrt(v_lead**2 + 2.0 * self.p.gov_decel_mps2 * free).min(), v_squeeze))
 
     def velocity(self, fld: Field, cruise: float, v_road: float = np.inf) -> np.ndarray:
         """(s_dot, d_dot) along F at min(cruise, |F| cruise / F_att_max, v_safe, v_road); forward, the

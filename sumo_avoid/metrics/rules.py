@@ -9,7 +9,8 @@ scenario's ``[rules]``). Details per crossing in ``signal_crossings`` (ego, tls,
 ``yield_violations``: the ego's front bumper crosses the stop line of a link that must give way at
 that moment (:mod:`sumo_avoid.safety.yielding`) while a recorded vehicle of a foe link with
 priority arrives at its conflict point within the critical gap t_c of the ego's movement
-(``[rules]`` critical_gap_s / critical_gap_left_s; SUMO's lane positions from the recording).
+(``[rules]`` critical_gap_s / critical_gap_left_s / zipper_headway_s; SUMO's lane positions from the
+recording).
 Details per crossing of a yielding link in ``yield_crossings`` (ego, junction, time, state, the
 first foe and its arrival time, s).
 """
@@ -101,7 +102,7 @@ def yield_crossings(run: RunResult) -> list[dict]:
             t_f, who = foe_arrival(lk.foes, signals, rows_by_lane(now["lane"].fillna("").to_numpy()), now["lane_pos"].to_numpy(float),
                                    now["speed"].to_numpy(float), now["length"].to_numpy(float),
                                    set(np.flatnonzero(ids == vid).tolist()))
-            t_c = critical_gap_s(lk.direction, p.critical_gap_s, p.critical_gap_left_s)
+            t_c = critical_gap_s(lk, p)
             out.append({"ego": vid, "junction": lk.junction, "time_s": float(t[k + 1]),
                         "state": link_state(signals, lk.tls, lk.link_index, lk.state),
                         "foe": str(ids[who]) if who >= 0 else "", "foe_arrival_s": None if who < 0 else round(t_f, 3),

@@ -47,9 +47,10 @@ from sumo_avoid.core.types import EgoTask
 from sumo_avoid.safety.yielding import (
     critical_gap_s,
     ego_time_to_line,
-    foe_arrival,
+    foe_arrivals,
     rows_by_lane,
     yields,
+    zipper_slot,
 )
 
 STOP, GO = "stop", "go"
@@ -73,6 +74,9 @@ class RulesParams:
                                              "speed up; the metric judges against t_c), s")
     commit_decel_mps2: float = field_doc(6.0, positive=True, doc="an ego that could stop before a yield line only "
                                                                   "braking harder than this goes on, m/s^2")
+    zipper_headway_s: float = field_doc(1.0, positive=True, doc="t_c of a zipper merge ('Z' links): the ego enters "
+                                                                 "at least this long after and before the foes "
+                                                                 "(accepted freeway-merge lead/lag gaps are ~1 s), s")
 
 
 @dataclass
@@ -153,9 +157,13 @@ class TrafficRulesLayer:
                 break
             if not yields(link, snap.signals) or v * v / (2.0 * p.commit_decel_mps2) > d:
                 continue  # priority now, or too late to stop: go on
-            t_f, _ = foe_arrival(link.foes, snap.signals, lanes, snap.lane_pos, snap.speed, snap.length, {row})
-            t_c = critical_gap_s(link.direction, p.critical_gap_s, p.critical_gap_left_s)
-            if t_f < ego_time_to_line(d, v, p.stop_margin_m) + t_c + p.gap_margin_s:
+            arrivals = [a for a, _ in foe_arrivals(link.foes, snap.signals, lanes, snap.lane_pos, snap.speed,
+                                                   snap.length, {row})]
+            t_c, t_e = critical_gap_s(link, p), ego_time_to_line(d, v, p.stop_margin_m)
+            if link.state == "Z":  # take turns: arrive in the first free slot (yielding.zipper_slot)
+                t_slot = zipper_slot(t_e, arrivals, t_c + p.gap_margin_s)
+                return (math.inf, -1.0) if t_slot <= t_e else (max(d - p.stop_margin_m, 0.0) / t_slot, link.s_stop_m)
+            if min(arrivals, default=math.inf) < t_e + t_c + p.gap_margin_s:
                 return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
             return math.inf, -1.0  # the nearest yield line ahead is clear: the ones after it wait their turn
         return math.inf, -1.0

@@ -36,3 +36,38 @@ def test_force_is_minus_gradient_of_potential():
     U = lambda r: repulsion(np.array([r]), np.array([[1.0, 0.0]]), np.array([3.0]), 5.0)[0][0]
     _, F = repulsion(np.array([1.5]), np.array([[1.0, 0.0]]), np.array([3.0]), 5.0)
     assert F[0, 0] == pytest.approx(-(U(1.5 + h) - U(1.5 - h)) / (2 * h), rel=1e-5)
+
+
+# --- a standing car whose nose reaches into the ego's margin ("squeeze") ---------------------
+def _waiting_car_scene(o_vel_d=0.0, lo=-2.35):
+    """Like the spider-net junction case: the ego at d 0.46 (its lanes span -2.35..2.35), a car
+    5.3 m ahead at d 2.5 facing the other way, turned 0.16 rad: its nearest corner (d 1.254, 0.68 m
+    ahead of the ego's front) reaches 0.106 m into the ego's strip; a shift of 0.206 m clears it
+    by 0.1 m and fits 0.68 tan 35 deg = 0.476 m. Standing (or closing across at ``o_vel_d``)."""
+    from sumo_avoid.control.road_view import FrenetScene
+
+    return FrenetScene(170.2, 0.46, 0.0, np.zeros(2), 4.5, 1.8, np.array([[175.5, 2.5]]), np.array([np.pi + 0.16]),
+                       np.array([4.5]), np.array([1.8]), np.array([[0.0, o_vel_d]]),
+                       lambda s: (np.full(len(s), lo), np.full(len(s), 2.35)))
+
+
+def _controller():
+    from sumo_avoid.control.apf import ApfController, ApfParams
+    from sumo_avoid.rollout.assemble import Context
+
+    return ApfController(ApfParams(), Context(seed=1, step_s=0.1))
+
+
+def test_a_standing_car_the_ego_can_steer_clear_of_is_passed_at_a_crawl():
+    ctl, sc = _controller(), _waiting_car_scene()
+    fld = ctl.field(sc, sc.q[None], np.array([185.2, 0.0]))
+    assert fld.v_safe == ctl.p.squeeze_speed_mps  # 2 m/s, not a standstill
+    assert fld.F[0, 0] > 0.0 and fld.F[0, 1] < 0.0  # on, and away from it (right)
+
+
+@pytest.mark.parametrize("case", ["closing across the road", "no room on the other side"])
+def test_a_car_the_ego_cannot_steer_clear_of_still_blocks(case):
+    ctl = _controller()
+    sc = _waiting_car_scene(o_vel_d=-0.5) if case.startswith("closing") else _waiting_car_scene(lo=-0.5)  # 0.46 - 0.206 - 0.9 = -0.646 < -0.5
+    fld = ctl.field(sc, sc.q[None], np.array([185.2, 0.0]))
+    assert fld.v_safe == 0.0 and fld.F[0, 0] < 0.0

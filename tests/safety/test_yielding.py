@@ -14,6 +14,7 @@ import sumo
 from sumo_avoid import outputs
 from sumo_avoid.core.types import FoeLink, RouteLink
 from sumo_avoid.rollout import runner
+from sumo_avoid.safety.rules import RulesParams
 from sumo_avoid.safety.yielding import (
     critical_gap_s,
     ego_time_to_line,
@@ -21,6 +22,7 @@ from sumo_avoid.safety.yielding import (
     link_state,
     rows_by_lane,
     yields,
+    zipper_slot,
 )
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.sumo.road import Road
@@ -37,8 +39,17 @@ def test_link_state_and_who_yields():
     signalled = RouteLink(100.0, "J", tls="T", link_index=1, state="o", foes=(FoeLink(),))
     assert yields(signalled, {"T": "GgG"})  # permissive green
     assert not yields(signalled, {"T": "GGG"}) and not yields(signalled, {"T": "rrr"})  # major green; red is the signal's
-    assert critical_gap_s("l", 4.5, 5.0) == 5.0 and critical_gap_s("t", 4.5, 5.0) == 5.0
-    assert critical_gap_s("s", 4.5, 5.0) == 4.5 and critical_gap_s("r", 4.5, 5.0) == 4.5
+    p = RulesParams()  # 4.5 s, 5 s left, 1 s zipper
+    assert [critical_gap_s(RouteLink(0.0, "J", state="m", direction=d), p) for d in "ltsr"] == [5.0, 5.0, 4.5, 4.5]
+    assert critical_gap_s(RouteLink(0.0, "J", state="Z", direction="s"), p) == 1.0
+
+
+def test_zipper_slot_by_hand():
+    h = 2.0
+    assert zipper_slot(3.0, [], h) == 3.0  # nobody: now
+    assert zipper_slot(3.0, [0.5, 5.5], h) == 3.0  # 2.5 s after one and before the next
+    assert zipper_slot(3.0, [2.0, 4.5], h) == 6.5  # 2.0 and 4.5 too close: behind the second
+    assert zipper_slot(3.0, [2.0, 4.0, 7.0, 9.5], h) == 11.5  # 6.0 is 1 s before 7.0, 9.0 0.5 s before 9.5
 
 
 def test_foe_arrival_by_hand():
