@@ -23,9 +23,9 @@ field, and the command is mapped back to the plane. Per ego and step:
   (v_close^2 / (2 b) + t_h |v|)`` with ``phi`` the bearing of the obstacle from the heading and
   ``v_close`` the closing speed: an obstacle ahead is felt from the stopping distance, one beside
   only from ``rho0_min``. A vehicle whose footprint does not overlap the ego's across the road
-  (d, with ``gov_margin_m``; oncoming traffic in its lane, a car in the next lane) closes only
-  with its speed across the road and pushes only across it (no component along s): the ego can
-  pass it.
+  (d, with ``gov_margin_m``; oncoming traffic in its lane, a car in the next lane) is felt from
+  ``rho0_beside_m`` plus the lateral stopping distance of its closing speed across the road, and
+  pushes only across it (no component along s): the ego can pass it.
 * **Velocity**: the ego moves along F (direction F/|F|) at ``min(cruise, |F| * cruise / F_att_max,
   v_safe, v_curve)``: at the potential's minimum it stops; ``v_curve`` is the speed for the road
   ahead (SPEC §5: sqrt(a_lat / |kappa|) within braking distance, RouteFrame.curve_speed_limit). ``v_safe`` is a speed governor: the speed from
@@ -52,7 +52,10 @@ class ApfParams:
     k_att: float = field_doc(1.0, doc="attraction gain K_att, 1/s (force in m/s units)")
     d_att_m: float = field_doc(10.0, doc="attraction is capped beyond this distance d, m")
     k_rep: float = field_doc(300.0, doc="vehicle/obstacle repulsion gain K_rep, m^3/s")
-    rho0_min_m: float = field_doc(2.0, doc="influence distance beside an obstacle / at standstill, m")
+    rho0_min_m: float = field_doc(2.0, doc="influence distance of an obstacle in the ego's strip at standstill, m")
+    rho0_beside_m: float = field_doc(1.0, doc="influence distance of a vehicle beside the ego's strip that does "
+                                              "not close across the road (lane-centred neighbours on 3.2 m lanes "
+                                              "are 1.4 m apart), m")
     rho0_decel_mps2: float = field_doc(4.0, doc="braking used for the influence distance, m/s^2")
     rho0_headway_s: float = field_doc(0.8, doc="time headway added to the influence distance ahead, s")
     k_edge: float = field_doc(2.0, doc="road-edge and solid-line repulsion gain, m^3/s")
@@ -193,8 +196,14 @@ class ApfController:
             beside = (e_lo - p.gov_margin_m > o_hi) | (e_hi + p.gov_margin_m < o_lo)
             squeeze = ~beside & self._squeeze(sc, q_cand, oc, side, lat_closing)
             beside = beside | squeeze
-            closing = np.where(beside, lat_closing, closing)
-            rho0 = p.rho0_min_m + cos_phi * (closing**2 / (2 * p.rho0_decel_mps2) + p.rho0_headway_s * np.hypot(*v_ego))
+            # its influence distance is the clearance kept beside a car plus the lateral stopping
+            # distance of its closing speed: the ego's own speed (the headway term, for following)
+            # does not count, so a lane-centred car in the next lane does not push the ego at all
+            # (at 2 m and 0.8 s headway a car in the next lane pushed an ego at 20 m/s from 13 m away;
+            # ramp_main seed 1: it drifted 1.15 m towards the merging lane and was side-swiped)
+            rho0 = np.where(beside, p.rho0_beside_m + lat_closing**2 / (2 * p.rho0_decel_mps2),
+                            p.rho0_min_m + cos_phi * (closing**2 / (2 * p.rho0_decel_mps2)
+                                                      + p.rho0_headway_s * np.hypot(*v_ego)))
             Ur, Fr = repulsion(rho, away, rho0, p.k_rep)
             Fr[:, 0] = np.where(beside, 0.0, Fr[:, 0])  # ... and pushes only across it, never back
             U = U + Ur.reshape(C, O).sum(axis=1)
