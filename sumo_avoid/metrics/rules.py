@@ -13,6 +13,10 @@ priority arrives at its conflict point within the critical gap t_c of the ego's 
 recording).
 Details per crossing of a yielding link in ``yield_crossings`` (ego, junction, time, state, the
 first foe and its arrival time, s).
+
+``stop_sign_violations``: the ego's front crosses the line of a stop sign ('s' / 'w') without
+having stood (slower than ``[rules]`` stop_speed_mps) within stop_margin_m + stop_zone_m before it;
+``stop_crossings`` per crossing.
 """
 from __future__ import annotations
 
@@ -21,7 +25,7 @@ import numpy as np
 from sumo_avoid.core.polyline import polyline_track
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.rollout.result import RunResult
-from sumo_avoid.safety.rules import RED
+from sumo_avoid.safety.rules import RED, STOP_SIGNS
 from sumo_avoid.safety.yielding import (
     critical_gap_s,
     first_crossing,
@@ -110,10 +114,35 @@ def yield_crossings(run: RunResult) -> list[dict]:
     return out
 
 
+def stop_crossings(run: RunResult) -> list[dict]:
+    """Crossings of a stop sign's line ('s' / 'w' at that moment): a violation unless the ego stood
+    (slower than stop_speed_mps) with its front within stop_margin_m + stop_zone_m before the line."""
+    if not run.tasks:
+        return []
+    p = run.scenario.spec.rules
+    out = []
+    for vid, task, ego, s in _ego_tracks(run, lambda lk: lk.state in STOP_SIGNS or bool(lk.tls)):
+        t, v = ego["time_s"].to_numpy(), ego["speed"].to_numpy()
+        for lk in task.links:
+            k = first_crossing(s, lk.s_stop_m)
+            if k < 0:
+                continue
+            c = link_state(_signals_at(run.signals, t[k]), lk.tls, lk.link_index, lk.state)
+            if c not in STOP_SIGNS:
+                continue
+            near = (s[: k + 1] >= lk.s_stop_m - p.stop_margin_m - p.stop_zone_m)
+            stood = bool(np.any(np.abs(v[: k + 1][near]) < p.stop_speed_mps))
+            out.append({"ego": vid, "junction": lk.junction, "time_s": float(t[k + 1]), "state": c,
+                        "violation": not stood})
+    return out
+
+
 class RuleViolations(Metric):
     def compute(self, run: RunResult) -> dict:
         crossings = signal_crossings(run)
         yielding = yield_crossings(run)
+        stops = stop_crossings(run)
         return {"red_light_violations": sum(c["violation"] for c in crossings),
                 "signal_crossings": crossings,
-                "yield_violations": sum(c["violation"] for c in yielding), "yield_crossings": yielding}
+                "yield_violations": sum(c["violation"] for c in yielding), "yield_crossings": yielding,
+                "stop_sign_violations": sum(c["violation"] for c in stops), "stop_crossings": stops}

@@ -16,7 +16,11 @@ Per ego and step, with s the arc length of the ego's front bumper projected on i
   line by the same braking curve while a vehicle of a foe link with priority would reach the
   conflict point within the critical gap (plus a margin) after the ego reaches the line; an ego
   that could stop before the line only braking harder than ``commit_decel_mps2`` goes on, and
-  past the line it never stops for a foe (it clears the junction).
+  past the line it never stops for a foe (it clears the junction). A zipper merge is taken in
+  turn (yielding.zipper_slot).
+* **Stop signs.** At a link whose state is 's' (stop) or 'w' (all-way stop) the ego is held by
+  the braking curve until it has stood (slower than ``stop_speed_mps``) with its front within
+  ``stop_zone_m`` of its stop position; then it only gives way as above.
 * **Speed for the road ahead.** v <= sqrt(v_i^2 + 2 b_comf (s_i - s)) for every lane piece i
   starting within ``lookahead_m`` at s_i with speed limit v_i x ``speed_factor`` (SUMO's
   speedFactor idea; junction internal lanes carry netconvert's turning speeds). Off by default
@@ -48,6 +52,7 @@ from sumo_avoid.safety.yielding import (
     critical_gap_s,
     ego_time_to_line,
     foe_arrivals,
+    link_state,
     rows_by_lane,
     yields,
     zipper_slot,
@@ -55,6 +60,7 @@ from sumo_avoid.safety.yielding import (
 
 STOP, GO = "stop", "go"
 RED = frozenset("ru")
+STOP_SIGNS = frozenset("sw")  # stop sign, all-way stop: stand at the line, then give way
 
 
 @dataclass(frozen=True)
@@ -74,6 +80,10 @@ class RulesParams:
                                              "speed up; the metric judges against t_c), s")
     commit_decel_mps2: float = field_doc(6.0, positive=True, doc="an ego that could stop before a yield line only "
                                                                   "braking harder than this goes on, m/s^2")
+    stop_speed_mps: float = field_doc(0.1, positive=True, doc="at a stop sign ('s' / 'w' links) the ego stands "
+                                                               "(slower than this) before it goes on, m/s")
+    stop_zone_m: float = field_doc(3.0, positive=True, doc="... with its front at most this far before the stop "
+                                                            "position (stop_margin_m before the line), m")
     zipper_headway_s: float = field_doc(1.0, positive=True, doc="t_c of a zipper merge ('Z' links): the ego enters "
                                                                  "at least this long after and before the foes "
                                                                  "(accepted freeway-merge lead/lag gaps are ~1 s), s")
@@ -86,6 +96,7 @@ class _Ego:
     s_m: float = 0.0  # front bumper's arc length on task.path, followed step by step
     seen: bool = False
     yellow: dict = field(default_factory=dict)  # link position in task.links -> STOP | GO at the yellow's onset
+    stopped: set = field(default_factory=set)  # link positions of stop signs where the ego has stood
 
 
 def signal_char(signals, link) -> str:
@@ -121,7 +132,7 @@ class TrafficRulesLayer:
         self._yields: set[tuple[str, float]] = set()  # (ego, stop line s) where the ego gave way
 
     def add_ego(self, task: EgoTask) -> None:
-        watch = any(lk.tls or lk.foes for lk in task.links) or self.p.speed_factor is not None
+        watch = any(lk.tls or lk.foes or lk.state in STOP_SIGNS for lk in task.links) or self.p.speed_factor is not None
         self._egos[task.vid] = _Ego(task, watch)
 
     def remove_ego(self, vid: str) -> None:
@@ -149,13 +160,21 @@ class TrafficRulesLayer:
         """(speed cap, s of the yield line that sets it): stop before the next link that must give
         way while a foe with priority arrives within the critical gap (:mod:`.yielding`)."""
         p = self.p
-        for link in e.task.links:
+        for k, link in enumerate(e.task.links):
             d = link.s_stop_m - e.s_m
-            if d <= 0 or not link.foes:
+            if d <= 0:
                 continue
             if d > p.lookahead_m:
                 break
-            if not yields(link, snap.signals) or v * v / (2.0 * p.commit_decel_mps2) > d:
+            late = v * v / (2.0 * p.commit_decel_mps2) > d
+            if k not in e.stopped and link_state(snap.signals, link.tls, link.link_index, link.state) in STOP_SIGNS:
+                if v < p.stop_speed_mps and d - p.stop_margin_m <= p.stop_zone_m:
+                    e.stopped.add(k)  # stood at the sign: from now on it only gives way
+                elif not late:
+                    return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
+            if not link.foes:
+                continue
+            if not yields(link, snap.signals) or late:
                 continue  # priority now, or too late to stop: go on
             arrivals = [a for a, _ in foe_arrivals(link.foes, snap.signals, lanes, snap.lane_pos, snap.speed,
                                                    snap.length, {row})]

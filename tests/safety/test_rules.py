@@ -98,3 +98,46 @@ def test_road_speed_cap_is_the_braking_envelope_of_the_limits_ahead():
     assert road_speed_cap(task, 0.0, p) == pytest.approx(20.0)  # sqrt(100 + 400) = 22.4 > 20 here
     assert road_speed_cap(task, 50.0, RulesParams(comfort_decel_mps2=2.0, speed_factor=1.2)) == \
         pytest.approx(math.sqrt(12.0**2 + 200.0))
+
+
+@pytest.fixture(scope="module")
+def stop_grid(tmp_path_factory):
+    """The same 3x3 grid with every junction an all-way stop (netgenerate -j allway_stop): B1's
+    links are 'w'."""
+    d = tmp_path_factory.mktemp("stop")
+    subprocess.run([str(BIN / "netgenerate"), "--grid", "--grid.x-number", "3", "--grid.y-number", "3",
+                    "--grid.length", "150", "--default.lanenumber", "1", "--no-turnarounds", "true",
+                    "-j", "allway_stop", "--seed", "1", "-o", str(d / "grid.net.xml")],
+                   check=True, capture_output=True)
+    (d / "ego.rou.xml").write_text(
+        '<routes>\n  <vType id="ego_car" length="4.5" width="1.8" accel="3" decel="8" maxSpeed="20"/>\n'
+        '  <route id="r" edges="A1B1 B1C1"/>\n'
+        '  <vehicle id="ego" type="ego_car" route="r" depart="0" departPos="5" departSpeed="12"/>\n</routes>\n')
+    return d
+
+
+def _stop_run(d, rules):
+    f = d / f"s_{rules}.toml"
+    f.write_text(f'name = "stop"\n[sim]\nnet = "grid.net.xml"\nroutes = ["ego.rou.xml"]\nstep_s = 0.1\n'
+                 f'duration_s = 30.0\nseed = 1\n[ego]\nids = ["ego"]\ncontroller = "scripted"\n'
+                 f'cruise_speed_mps = 12.0\nrules = "{rules}"\n[controllers.scripted]\nspeed_mps = 12.0\n')
+    res = runner.run(scenario.load(f))
+    return res, outputs.run_metrics(res)
+
+
+@pytest.mark.sumo
+def test_all_way_stop_the_ego_stands_at_the_line_then_goes(stop_grid):
+    res, m = _stop_run(stop_grid, "traffic")
+    (link,) = res.tasks["ego"].links
+    assert link.state == "w"
+    _, v, s, _ = _front_s(res)
+    near = (s > link.s_stop_m - 4.0) & (s < link.s_stop_m)  # stop margin 1 m + zone 3 m before the line
+    assert v[near].min() < 0.1 and s.max() > link.s_stop_m + 20.0  # stood there, then went on
+    assert m["stop_sign_violations"] == 0 and len(m["stop_crossings"]) == 1 and m["goal_reached"]
+
+
+@pytest.mark.sumo
+def test_without_rules_the_ego_runs_the_stop_sign_and_the_metric_says_so(stop_grid):
+    _, m = _stop_run(stop_grid, "none")
+    (c,) = m["stop_crossings"]
+    assert c["violation"] and c["state"] == "w" and m["stop_sign_violations"] == 1
