@@ -21,18 +21,22 @@ BIN = pathlib.Path(sumo.SUMO_HOME) / "bin"
 N_LINKS = 12  # links of B1 in this net (netgenerate: 4 arms x right/straight/left, no turnarounds)
 
 
-@pytest.fixture(scope="module")
-def grid(tmp_path_factory):
-    d = tmp_path_factory.mktemp("tl")
+def _grid_net(d: pathlib.Path, *options: str) -> pathlib.Path:
+    """A netgenerate 3x3 grid (150 m, one lane) with ``options`` and the ego's route A1B1 B1C1."""
     subprocess.run([str(BIN / "netgenerate"), "--grid", "--grid.x-number", "3", "--grid.y-number", "3",
                     "--grid.length", "150", "--default.lanenumber", "1", "--no-turnarounds", "true",
-                    "--tls.set", "B1", "--seed", "1", "-o", str(d / "grid.net.xml")],
+                    *options, "--seed", "1", "-o", str(d / "grid.net.xml")],
                    check=True, capture_output=True)
     (d / "ego.rou.xml").write_text(
         '<routes>\n  <vType id="ego_car" length="4.5" width="1.8" accel="3" decel="8" maxSpeed="20"/>\n'
         '  <route id="r" edges="A1B1 B1C1"/>\n'
         '  <vehicle id="ego" type="ego_car" route="r" depart="0" departPos="5" departSpeed="12"/>\n</routes>\n')
     return d
+
+
+@pytest.fixture(scope="module")
+def grid(tmp_path_factory):
+    return _grid_net(tmp_path_factory.mktemp("tl"), "--tls.set", "B1")
 
 
 def _scenario(d: pathlib.Path, phases, rules="traffic", duration=45.0):
@@ -102,18 +106,8 @@ def test_road_speed_cap_is_the_braking_envelope_of_the_limits_ahead():
 
 @pytest.fixture(scope="module")
 def stop_grid(tmp_path_factory):
-    """The same 3x3 grid with every junction an all-way stop (netgenerate -j allway_stop): B1's
-    links are 'w'."""
-    d = tmp_path_factory.mktemp("stop")
-    subprocess.run([str(BIN / "netgenerate"), "--grid", "--grid.x-number", "3", "--grid.y-number", "3",
-                    "--grid.length", "150", "--default.lanenumber", "1", "--no-turnarounds", "true",
-                    "-j", "allway_stop", "--seed", "1", "-o", str(d / "grid.net.xml")],
-                   check=True, capture_output=True)
-    (d / "ego.rou.xml").write_text(
-        '<routes>\n  <vType id="ego_car" length="4.5" width="1.8" accel="3" decel="8" maxSpeed="20"/>\n'
-        '  <route id="r" edges="A1B1 B1C1"/>\n'
-        '  <vehicle id="ego" type="ego_car" route="r" depart="0" departPos="5" departSpeed="12"/>\n</routes>\n')
-    return d
+    """The same grid with every junction an all-way stop: B1's links are 'w'."""
+    return _grid_net(tmp_path_factory.mktemp("stop"), "-j", "allway_stop")
 
 
 def _stop_run(d, rules):
