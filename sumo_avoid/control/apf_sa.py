@@ -14,7 +14,8 @@ draw x1 = x + step (cos a, sin a) with a uniform; positions whose footprint leav
 ego's direction are refused; Delta = U(x1) - U(x); accept when Delta <= 0 or exp(-Delta/T) > u (u uniform);
 cool T <- T * ``sa_cooling`` after each draw; stop when the walk is at least ``sa_escape_m`` from
 the trap with a potential below the trap's (it has left the basin), or after ``sa_max_iter``
-draws (then no escape this time). A car cannot jump to x1, so the walk's end point becomes an
+draws (then no escape this time, and the next search waits ``trap_window_s`` x 2^(failures in a
+row), at most ``sa_backoff_max_s``; a search costs up to ``sa_max_iter`` field evaluations). A car cannot jump to x1, so the walk's end point becomes an
 *escape target*: the ego follows the reference path shifted sideways by the end point's d
 (e.g. the free lane) until it has held that offset for ``escape_hold_s`` or
 ``escape_timeout_s`` has passed; then plain APF resumes.
@@ -45,6 +46,10 @@ class ApfSaParams(ApfParams):
     sa_max_iter: int = field_doc(1000, doc="SA draws per escape search (seed: 1000)")
     sa_escape_m: float = field_doc(3.0, doc="the walk has left the minimum this far from the trap, m")
     sa_free_ahead_m: float = field_doc(20.0, doc="the walk has left the basin where this much is free ahead along the route, m")
+    sa_backoff_max_s: float = field_doc(16.0, doc="after a search finds no escape the next waits trap_window_s, "
+                                                  "doubled per failure in a row up to this, s (behind a slow truck "
+                                                  "with oncoming traffic, 24 fruitless searches took 3/4 of a run's "
+                                                  "CPU time)")
     escape_hold_s: float = field_doc(3.0, doc="keep the escape offset this long once reached, s")
     escape_timeout_s: float = field_doc(10.0, doc="give up an escape after this long, s")
     escape_room_m: float = field_doc(12.0, doc="when blocked, back up until this much room is free ahead, m")
@@ -60,6 +65,7 @@ class _EgoState:
     held_since_s: float | None = None
     cooldown_until_s: float = -math.inf
     reversing: bool = False
+    failures: int = 0  # searches in a row that found no escape (the wait before the next doubles)
 
 
 class ApfSaController(ApfController):
@@ -107,13 +113,17 @@ class ApfSaController(ApfController):
             slow = progress < p.trap_progress_frac * v_ref * p.trap_window_s
             stuck_now = (force < p.trap_force_frac * f_max or fld.v_safe < 0.9 * v_ref
                          or (speed < 0.5 and math.isfinite(fld.v_safe)))
+            if window_full and progress >= p.trap_progress_frac * task.cruise_speed_mps * p.trap_window_s:
+                st.failures = 0  # at cruise progress again (not merely slowed for a bend): a new trap next
             if (st.escape_offset is None and window_full and slow and stuck_now and t >= st.cooldown_until_s):
                 end = self._anneal(view, sc, target)
                 if end is None:
                     self.failed_searches += 1
-                    st.cooldown_until_s = t + p.trap_window_s
+                    st.cooldown_until_s = t + min(p.trap_window_s * 2.0**st.failures, p.sa_backoff_max_s)
+                    st.failures += 1
                 else:
                     self.escapes += 1
+                    st.failures = 0
                     st.escape_offset = self._inside_offset(view, sc, float(end[1]))
                     st.escape_start_s, st.held_since_s = t, None
                     target = self.carrot(view, sc, st.escape_offset)
