@@ -21,14 +21,21 @@ from sumo_avoid.actuation import ACTUATORS
 from sumo_avoid.actuation.params import ActuatorConfig
 from sumo_avoid.control import CONTROLLERS
 from sumo_avoid.core.config import FieldError, ScenarioError, build, field_doc
+from sumo_avoid.core.interfaces import Context
 from sumo_avoid.metrics import METRICS
+from sumo_avoid.rollout.arena import random_positions, square
 from sumo_avoid.safety import LAYERS, RULES
 from sumo_avoid.safety.danger_time import DangerTimeParams
 from sumo_avoid.safety.rules import RulesParams
 from sumo_avoid.scenario.obstacles import RandomObstaclesConfig, draw
 from sumo_avoid.sensing import SENSORS
 from sumo_avoid.sensing.radar import RadarParams
+from sumo_avoid.sumo.inputs import InputError, check_inputs, depart_times
 from sumo_avoid.sumo.road import Road
+
+MIN_STEP_S, MAX_STEP_S = 0.001, 10.0  # SUMO counts time in ms
+MAX_DURATION_S = 86_400.0  # one simulated day: a longer run is a typo, not a study
+MAX_SEED = 2**31 - 1
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -50,10 +57,17 @@ class SimConfig:
                                                 "check (always off in an [arena])")
 
     def __post_init__(self):
-        if self.step_s <= 0 or self.duration_s <= 0:
-            raise ValueError("sim.step_s and sim.duration_s > 0")
+        if not MIN_STEP_S <= self.step_s <= MAX_STEP_S or abs(self.step_s * 1000 - round(self.step_s * 1000)) > 1e-6:
+            raise FieldError("step_s", f"a step in [{MIN_STEP_S}, {MAX_STEP_S}] s, a whole number of ms (SUMO's time "
+                                       "resolution)", self.step_s)
+        if not 0 < self.duration_s <= MAX_DURATION_S:
+            raise FieldError("duration_s", f"a duration in (0, {MAX_DURATION_S:g}] s", self.duration_s)
+        if self.step_s > self.duration_s:
+            raise FieldError("step_s", f"a step no longer than sim.duration_s ({self.duration_s} s)", self.step_s)
+        if not 0 <= self.seed <= MAX_SEED:
+            raise FieldError("seed", f"an integer in [0, {MAX_SEED}] (SUMO's seed is a 32-bit integer)", self.seed)
         if self.lateral_resolution_m <= 0:
-            raise ValueError("sim.lateral_resolution_m > 0")
+            raise FieldError("lateral_resolution_m", "a positive width, m", self.lateral_resolution_m)
 
 
 @dataclass(frozen=True)
@@ -92,8 +106,8 @@ class ArenaConfig:
     min_spacing_m: float = field_doc(6.0, doc="smallest distance between two start positions, m")
     margin_m: float = field_doc(5.0, doc="start positions keep this far from walls and obstacles, m")
     initial_speed_mps: float = field_doc(0.0, doc="initial speed (random heading), m/s")
-    length_m: float = field_doc(4.0, doc="vehicle length, m")
-    width_m: float = field_doc(1.8, doc="vehicle width, m")
+    length_m: float = field_doc(4.0, positive=True, doc="vehicle length, m")
+    width_m: float = field_doc(1.8, positive=True, doc="vehicle width, m")
     id_prefix: str = field_doc("f", doc="vehicle ids are PREFIX0 .. PREFIX(N-1)")
     starts: tuple[tuple[float, ...], ...] = field_doc((), signed=True, doc="[[x, y], ...] fixed start centres, one "
                                                                            "per agent, m (default: random)")
@@ -120,12 +134,28 @@ class ObstacleConfig:
 
     def __post_init__(self):
         if len(self.shape) < 3 or any(len(p) != 2 for p in self.shape):
-            raise ValueError(f"obstacle {self.id}: shape needs >= 3 points [x, y]")
+            raise FieldError("shape", ">= 3 points [x, y]", [list(p) for p in self.shape])
+        if not is_convex(self.polygon):
+            raise FieldError("shape", "a convex polygon with a non-zero area (corners in order, no three on a line)",
+                             [list(p) for p in self.shape])
 
     @property
     def polygon(self) -> np.ndarray:
         """(k, 2) vertices, m."""
         return np.asarray(self.shape, float)
+
+
+def is_convex(pts: np.ndarray, eps: float = 1e-9) -> bool:
+    """A simple convex polygon of non-zero area: every corner turns the same way (strictly) and the
+    corners go round once (the turns add up to one full circle, not a star)."""
+    d = np.roll(pts, -1, axis=0) - pts  # edge vectors
+    nxt = np.roll(d, -1, axis=0)
+    cross = d[:, 0] * nxt[:, 1] - d[:, 1] * nxt[:, 0]
+    scale = max(float(np.abs(d).max()), eps) ** 2
+    if not (np.all(cross > eps * scale) or np.all(cross < -eps * scale)):
+        return False
+    turns = np.arctan2(cross, (d * nxt).sum(axis=1))
+    return bool(abs(abs(turns.sum()) - 2 * np.pi) < 1e-6)
 
 
 @dataclass(frozen=True)
@@ -156,7 +186,21 @@ class ScenarioSpec:
 
     def __post_init__(self):
         if not self.ego.ids and (self.arena is None or self.arena.n_agents == 0):
-            raise ValueError("at least one ego id in ego.ids (or an [arena] table)")
+            raise FieldError("ego.ids", "at least one ego id (or an [arena] table with n_agents > 0)", [])
+        for key, ids in (("ego.ids", self.ego.ids), ("obstacles", [o.id for o in self.obstacles])):
+            dup = _first_duplicate(ids)
+            if dup is not None:
+                raise FieldError(f"{key}[{dup}]" + (".id" if key == "obstacles" else ""),
+                                 "ids used once (this one is used before)", ids[dup])
+
+
+def _first_duplicate(ids) -> int | None:
+    seen = set()
+    for i, v in enumerate(ids):
+        if v in seen:
+            return i
+        seen.add(v)
+    return None
 
 
 @dataclass(frozen=True)
@@ -220,6 +264,11 @@ def read_toml(path: pathlib.Path) -> dict:
             return tomllib.load(fh)
     except tomllib.TOMLDecodeError as e:
         raise ScenarioError(file, "<syntax>", f"valid TOML ({e})", show_got=False) from None
+    except UnicodeDecodeError as e:
+        raise ScenarioError(file, "<syntax>", f"a UTF-8 text file (TOML), not binary ({e.reason} at byte "
+                            f"{e.start})", show_got=False) from None
+    except OSError as e:
+        raise ScenarioError(file, "<file>", f"a readable file ({e.strerror})", show_got=False) from None
 
 
 def load(path, overrides: list[str] = (), controller: str | None = None, seed: int | None = None) -> Scenario:
@@ -260,9 +309,47 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     net = existing(spec.sim.net, "sim.net", "SUMO network")
     routes = tuple(existing(r, f"sim.routes[{i}]", "SUMO route") for i, r in enumerate(spec.sim.routes))
     adds = tuple(existing(r, f"sim.additional[{i}]", "SUMO additional") for i, r in enumerate(spec.sim.additional))
-    _check_ego_ids(spec.ego.ids, routes + adds, file)
+    _check_sumo_inputs(spec, net, routes, adds, file)
+    _check_ego_ids(spec, routes + adds, file)
     _check_goals(spec, net, file)
+    _check_ego_keys(spec, params, file)
+    if spec.arena is not None:
+        check_arena(spec, file)
     return Scenario(spec, path, net, routes, adds, params)
+
+
+def _check_sumo_inputs(spec: ScenarioSpec, net, routes, adds, file: str) -> None:
+    """The net, route and additional files as SUMO would load them (sumo/inputs.py), before SUMO starts."""
+    keys = {str(net): "sim.net", **{str(f): f"sim.routes[{i}]" for i, f in enumerate(routes)},
+            **{str(f): f"sim.additional[{i}]" for i, f in enumerate(adds)}}
+    try:
+        check_inputs(net, (*adds, *routes))  # SUMO loads additional files first
+    except InputError as e:
+        what = f", {e.element}" if e.element else ""
+        raise ScenarioError(file, keys.get(e.path, "sim"), f"a file SUMO can load: {e.path}{what}: {e.reason}",
+                            show_got=False) from None
+
+
+def _check_ego_keys(spec: ScenarioSpec, params: dict, file: str) -> None:
+    """Controller parameters keyed by ego id (scripted ``stop_after_m``) name egos."""
+    egos = set(spec.ego.ids) | set(spec.arena.ids if spec.arena is not None else ())
+    for vid in getattr(params.get("scripted"), "stop_after_m", {}):
+        if vid not in egos:
+            raise ScenarioError(file, f"controllers.scripted.stop_after_m.{vid}", f"an ego id (ego.ids: "
+                                f"{list(spec.ego.ids)})", vid, show_got=False)
+
+
+def check_arena(spec: ScenarioSpec, file: str) -> None:
+    """The flock's random start positions fit the arena (drawn as the run will draw them)."""
+    a = spec.arena
+    if a.starts or a.n_agents == 0:
+        return
+    walls = square(a.origin, a.size_m)
+    try:
+        random_positions(Context(spec.sim.seed, spec.sim.step_s, None, walls, ()).rng(1), a.n_agents, walls,
+                         tuple(o.polygon for o in spec.obstacles), min_spacing_m=a.min_spacing_m, margin_m=a.margin_m)
+    except ValueError as e:
+        raise ScenarioError(file, "arena.n_agents", f"a flock that fits the arena ({e})", a.n_agents) from None
 
 
 def _with_random_obstacles(spec: ScenarioSpec, file: str) -> ScenarioSpec:
@@ -373,14 +460,20 @@ def sumo_load_error(scn: Scenario, message: str) -> ScenarioError:
     return ScenarioError(str(scn.path), "sim", f"files SUMO can load (SUMO: {sumo})", show_got=False)
 
 
-def _check_ego_ids(ego_ids, files, file: str) -> None:
-    """Every ego id is a vehicle or trip of the route files (or a vehicle of a flow, FLOW.N)."""
-    if not ego_ids:
+def _check_ego_ids(spec: ScenarioSpec, files, file: str) -> None:
+    """Every ego id is a vehicle or trip of the route files (or a vehicle of a flow, FLOW.N) that
+    departs within the run (as far as its depart time says)."""
+    if not spec.ego.ids:
         return
     ids, flows = _defined_vehicles(files)
-    for i, vid in enumerate(ego_ids):
+    departs = depart_times(files)
+    for i, vid in enumerate(spec.ego.ids):
         if vid not in ids and vid.rpartition(".")[0] not in flows:
             raise ScenarioError(file, f"ego.ids[{i}]", "the id of a <vehicle> or <trip> in the route files", vid)
+        if departs.get(vid, 0.0) >= spec.sim.duration_s:
+            raise ScenarioError(file, f"ego.ids[{i}]", f"egos that depart within the run: '{vid}' departs at "
+                                f"t={departs[vid]:g} s, the run ends at sim.duration_s = {spec.sim.duration_s:g} s",
+                                show_got=False)
 
 
 def with_spec(scn: Scenario, **changes) -> Scenario:

@@ -120,8 +120,8 @@ def figure(df: pd.DataFrame, root: pathlib.Path, scn: str, out_png: pathlib.Path
 
 
 def run(args) -> int:
+    seeds = batch.parse_seeds(args.seeds, key="--runs")
     tuned = tuned_overrides(args.tuned)
-    seeds = batch.parse_seeds(args.seeds)
     extra = ("output.plots=false",) + ((f"random_obstacles.count={args.obstacles}",) if args.obstacles else ())
     scenarios = tuple(args.scenarios) or DEFAULT
     runs = plan(scenarios, seeds, tuned, extra)

@@ -22,17 +22,20 @@ own fork server).
 
 Test-only fault injection: ``inject_crash = "segfault"`` makes the child dereference a NULL
 pointer (a real SIGSEGV in native code), ``"abort"`` makes it call ``os.abort()``; both happen
-after the scenario is loaded, before SUMO starts. (A real input that segfaults SUMO 1.28:
+after the scenario is loaded, before SUMO starts; ``"segfault_mid_run"`` segfaults once the simulation has run
+``CRASH_AT_S`` (SUMO running). (A real input that segfaults SUMO 1.28:
 ``tests/data/segfault_net.toml``, see docs/batch.md.)
 """
 from __future__ import annotations
 
 import atexit
 import datetime
+import faulthandler
 import functools
 import json
 import os
 import pathlib
+import re
 import shutil
 import signal
 import subprocess
@@ -44,12 +47,14 @@ import uuid
 _IMPORT_START = (os.getpid(), time.time())  # a spawned run's interpreter imports what follows itself
 
 from sumo_avoid import outputs as evaluate  # noqa: E402
+from sumo_avoid.core.config import ScenarioError  # noqa: E402
 from sumo_avoid.rollout import runner  # noqa: E402
 from sumo_avoid.scenario import spec as scenario  # noqa: E402
 
 _IMPORTED = time.time()
 
-CRASHES = ("segfault", "abort")
+CRASHES = ("segfault", "abort", "segfault_mid_run")
+CRASH_AT_S = 1.0  # "segfault_mid_run": SIGSEGV once the simulation has run this long
 STARTS = ("fork", "spawn")
 # One run per core: BLAS thread pools would only oversubscribe the cores, and the fork server
 # must stay single-threaded to fork safely.
@@ -102,6 +107,24 @@ def _last_line(path: pathlib.Path) -> str:
     return lines[-1][:300] if lines else ""
 
 
+def crash_site(stderr_file: pathlib.Path) -> str:
+    """The innermost Python frame faulthandler wrote when the child died by a signal, e.g.
+    ``libsumo/libsumo.py:3545 (start)`` ("" if none)."""
+    try:
+        text = stderr_file.read_text(errors="replace")
+    except OSError:
+        return ""
+    m = re.search(r'File "([^"]+)", line (\d+) in (\S+)', text.split("most recent call first", 1)[-1])
+    if not m:
+        return ""
+    path = m.group(1)
+    for root in ("/site-packages/", "/sumo_avoid/"):  # libsumo/libsumo.py, sumo_avoid/sumo/sim.py
+        if root in path:
+            path = ("sumo_avoid/" if root == "/sumo_avoid/" else "") + path.rsplit(root, 1)[-1]
+            break
+    return f"{path}:{m.group(2)} ({m.group(3)})"
+
+
 def _child_env() -> dict:
     return {**os.environ, **CHILD_ENV}
 
@@ -113,27 +136,34 @@ def run_one(spec: dict, root: str, timeout_s: float, start: str | None = None) -
     ``start``: ``"fork"`` (from the warm fork server) or ``"spawn"`` (fresh interpreter);
     default :func:`default_start`.
     """
-    start = start or default_start()
-    if start not in STARTS:
-        raise ValueError(f"start must be one of {STARTS}, not {start!r}")
     root_p = pathlib.Path(root).absolute()  # the fork server's working directory may not be ours
     tmp = root_p / ".tmp" / f"{spec['key'][:16]}-{uuid.uuid4().hex[:8]}"
     tmp.mkdir(parents=True, exist_ok=True)
-    started, t0 = _now(), time.perf_counter()
-    job = dict(spec, out=str(tmp), timeout_s=timeout_s, id=tmp.name)
-    if start == "fork":
-        status = _run_forked(job, timeout_s)
-    else:
-        status = _run_spawned(job, tmp, timeout_s)
-    res = _result(tmp, status, timeout_s)
-    res.update(started_at=started, ended_at=_now(), wall_s=time.perf_counter() - t0, start=start)
-    res["marks"]["ended_wall"] = time.time()
+    res = run_in(tmp, spec, timeout_s, start)
     (tmp / "result.json").write_text(json.dumps(res, sort_keys=True))  # now with the parent's side and timings
     final = root_p / spec["key"][:16]
     if final.exists():  # left over from an unfinished earlier attempt (done runs are never re-run)
         shutil.rmtree(final)
     os.replace(tmp, final)
     res["artifacts"] = str(final)
+    return res
+
+
+def run_in(tmp: pathlib.Path, spec: dict, timeout_s: float, start: str | None = None) -> dict:
+    """Run one spec in its own process with ``tmp`` (an existing folder) as its output folder;
+    return its result dict (never raises for a failing run). ``sumo-avoid run`` uses this directly."""
+    start = start or default_start()
+    if start not in STARTS:
+        raise ValueError(f"start must be one of {STARTS}, not {start!r}")
+    started, t0 = _now(), time.perf_counter()
+    job = dict(spec, out=str(pathlib.Path(tmp).absolute()), timeout_s=timeout_s, id=pathlib.Path(tmp).name)
+    if start == "fork":
+        status = _run_forked(job, timeout_s)
+    else:
+        status = _run_spawned(job, pathlib.Path(tmp), timeout_s)
+    res = _result(pathlib.Path(tmp), status, timeout_s)
+    res.update(started_at=started, ended_at=_now(), wall_s=time.perf_counter() - t0, start=start)
+    res["marks"]["ended_wall"] = time.time()
     return res
 
 
@@ -149,6 +179,9 @@ def _result(tmp: pathlib.Path, status: dict, timeout_s: float) -> dict:
         res = {"status": "failed", "error": status["error"]}
     elif rc < 0:
         res = {"status": "failed", "error": f"worker died: {_signal_name(-rc)}"}
+        where = crash_site(tmp / "stderr.txt")
+        if where:
+            res["where"] = where
     else:
         tail = _last_line(tmp / "stderr.txt")
         res = {"status": "failed", "error": f"worker exited with code {rc} and no result" + (f": {tail}" if tail else "")}
@@ -352,6 +385,7 @@ def _cpu_s() -> float | None:
 def child(job: dict) -> int:
     own_imports = _IMPORT_START[0] == os.getpid()  # spawned: this process imported the run's modules
     marks = {"entry_wall": _IMPORT_START[1] if own_imports else time.time()}
+    faulthandler.enable()  # a fatal signal writes the Python stack to stderr.txt: where the run died
     _die_with_parent()
     if os.getppid() != job["parent"]:  # the parent died before prctl took effect
         return 3
@@ -367,20 +401,58 @@ def child(job: dict) -> int:
         marks["imported_wall"] = _IMPORTED if own_imports else time.time()
         scn = scenario.load(job["scenario"], job["overrides"], controller=job["controller"], seed=job["seed"])
         marks["loaded_wall"] = time.time()
-        if job.get("inject_crash"):
-            _crash(job["inject_crash"])
+        crash = job.get("inject_crash")
+        if crash in ("segfault", "abort"):
+            _crash(crash)
         t_run = time.time()
-        res = runner.run(scn, log_file=out / "sumo.log", progress=False)
+        watch = [ProgressFile(job["progress_file"])] if job.get("progress_file") else []
+        if crash == "segfault_mid_run":
+            watch.append(CrashAt(CRASH_AT_S))
+        res = runner.run(scn, log_file=out / "sumo.log", progress=False, callbacks=watch)
         marks["sumo_start_wall"] = t_run + res.timings.get("setup_s", 0.0)  # road and controllers set up
         marks["run_end_wall"] = time.time()
-        m = evaluate.write_outputs(res, out, plots=scn.spec.output.plots)
+        m = evaluate.write_outputs(res, out, plots=scn.spec.output.plots and job.get("plots", True))
         marks["written_wall"] = time.time()
         finish({"status": "done", "metrics": m, "timings": res.timings, "cpu_s": _cpu_s()})
         return 0
+    except ScenarioError as e:  # bad input found only once SUMO ran: the caller reports it as such
+        finish({"status": "failed", "error": f"ScenarioError: {e}"[:500], "bad_input": str(e)})
+        return 1
     except Exception as e:  # recorded as the run's failure, one line
         msg = str(e).strip().splitlines()[0] if str(e).strip() else ""
         finish({"status": "failed", "error": f"{type(e).__name__}: {msg}"[:500]})
         return 1
+
+
+class CrashAt:
+    """Rollout callback (test-only fault injection): a real SIGSEGV once simulated time reaches ``time_s``,
+    with SUMO running."""
+
+    def __init__(self, time_s: float):
+        self.time_s = time_s
+
+    def on_step(self, snap, n_steps: int) -> None:
+        if snap.time_s >= self.time_s:
+            _crash("segfault")
+
+    def on_end(self) -> None:
+        pass
+
+
+class ProgressFile:
+    """Rollout callback: the simulated time written to a file (a fixed-width number, rewritten in
+    place at most every 0.2 s), for a parent process's progress bar."""
+
+    def __init__(self, path: str):
+        self.fd, self.last = os.open(path, os.O_WRONLY | os.O_CREAT, 0o644), 0.0
+
+    def on_step(self, snap, n_steps: int) -> None:
+        if time.monotonic() - self.last >= 0.2:
+            self.last = time.monotonic()
+            os.pwrite(self.fd, f"{snap.time_s:16.3f}".encode(), 0)
+
+    def on_end(self) -> None:
+        os.close(self.fd)
 
 
 if __name__ == "__main__":
