@@ -128,7 +128,7 @@ def _run_child(args, scn, tmp: pathlib.Path) -> dict:
     try:
         while thread.is_alive():
             thread.join(0.2)
-            if bar is not None:
+            if bar is not None:  # the last reading comes after the run's end
                 bar.bar.update(max(0.0, min(_sim_time(tmp / "progress"), bar.bar.total) - bar.bar.n))
     except BaseException:  # Ctrl-C: the run's process goes too
         worker.kill_all()
@@ -178,6 +178,9 @@ def main(argv=None) -> int:
         if args.command == "keys":
             print(format_reference())
             return 0
+    except KeyboardInterrupt:
+        print("sumo-avoid: interrupted", file=sys.stderr)
+        return 130
     except ScenarioErrors as e:  # every bad input of a batch, one line each
         for err in e.errors:
             print(f"sumo-avoid: error: {err}", file=sys.stderr)

@@ -126,6 +126,7 @@ def run(args) -> int:
     scenarios = tuple(args.scenarios) or DEFAULT
     runs = plan(scenarios, seeds, tuned, extra)
     led = args.out / "ledger.sqlite"
+    ledger_mod.check(led, "--out")  # a folder that holds (or can hold) the study's ledger
     every = tuple(s for v in runs.values() for s in v)
     cfg = batch.BatchConfig(every, led, workers=args.workers or os.cpu_count() or 1, scheduler=args.scheduler)
     c = batch.run_batch(cfg)

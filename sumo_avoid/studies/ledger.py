@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import hashlib
+import io
 import json
 import pathlib
 import re
@@ -22,7 +23,7 @@ from importlib import metadata
 import pandas as pd
 
 from sumo_avoid.core.config import ScenarioError
-from sumo_avoid.studies.files import CL, check_out_file
+from sumo_avoid.studies.files import CL, check_out_file, write_atomic
 
 FIXED = {  # column -> SQL type; metric columns are added after these
     "key": "TEXT PRIMARY KEY",
@@ -184,18 +185,21 @@ def row_hashes(path) -> dict[str, str]:
 
 
 def export(path, out) -> list[pathlib.Path]:
-    """Write the table as CSV (always) and Parquet (only if pyarrow is installed) next to ``out``.
+    """Write the table as CSV (always) and Parquet (only if pyarrow is installed) next to ``out``, each
+    file whole or not at all.
 
     ``out`` is a file name; its suffix is replaced by ``.csv`` / ``.parquet``. Returns the files written.
     """
     out = pathlib.Path(out)
     df = read(path)
     written = [out.with_suffix(".csv")]
-    df.to_csv(written[0], index=False)
+    write_atomic(written[0], df.to_csv(index=False))
     try:
         import pyarrow  # noqa: F401
     except ImportError:
         return written
     written.append(out.with_suffix(".parquet"))
-    df.to_parquet(written[-1], index=False)
+    buf = io.BytesIO()
+    df.to_parquet(buf, index=False)
+    write_atomic(written[-1], buf.getvalue())
     return written

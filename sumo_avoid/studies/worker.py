@@ -35,7 +35,6 @@ import functools
 import json
 import os
 import pathlib
-import re
 import shutil
 import signal
 import subprocess
@@ -50,11 +49,19 @@ from sumo_avoid import outputs as evaluate  # noqa: E402
 from sumo_avoid.core.config import ScenarioError  # noqa: E402
 from sumo_avoid.rollout import runner  # noqa: E402
 from sumo_avoid.scenario import spec as scenario  # noqa: E402
+from sumo_avoid.studies.watch import (  # noqa: E402
+    CRASH_AT_S,
+    CrashAt,
+    ProgressFile,
+    cpu_s,
+    crash,
+    crash_site,
+    die_with_parent,
+)
 
 _IMPORTED = time.time()
 
 CRASHES = ("segfault", "abort", "segfault_mid_run")
-CRASH_AT_S = 1.0  # "segfault_mid_run": SIGSEGV once the simulation has run this long
 STARTS = ("fork", "spawn")
 # One run per core: BLAS thread pools would only oversubscribe the cores, and the fork server
 # must stay single-threaded to fork safely.
@@ -105,24 +112,6 @@ def _last_line(path: pathlib.Path) -> str:
     except OSError:
         return ""
     return lines[-1][:300] if lines else ""
-
-
-def crash_site(stderr_file: pathlib.Path) -> str:
-    """The innermost Python frame faulthandler wrote when the child died by a signal, e.g.
-    ``libsumo/libsumo.py:3545 (start)`` ("" if none)."""
-    try:
-        text = stderr_file.read_text(errors="replace")
-    except OSError:
-        return ""
-    m = re.search(r'File "([^"]+)", line (\d+) in (\S+)', text.split("most recent call first", 1)[-1])
-    if not m:
-        return ""
-    path = m.group(1)
-    for root in ("/site-packages/", "/sumo_avoid/"):  # libsumo/libsumo.py, sumo_avoid/sumo/sim.py
-        if root in path:
-            path = ("sumo_avoid/" if root == "/sumo_avoid/" else "") + path.rsplit(root, 1)[-1]
-            break
-    return f"{path}:{m.group(2)} ({m.group(3)})"
 
 
 def _child_env() -> dict:
@@ -353,40 +342,11 @@ def _exit_now(rc: int) -> None:
 
 
 # --- the run (in the child) ---------------------------------------------------------------------
-def _die_with_parent() -> None:
-    """Linux: get SIGKILL when the parent dies, so a killed batch leaves no orphan runs."""
-    try:
-        import ctypes
-
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):  # pragma: no cover - not Linux
-        pass
-
-
-def _crash(kind: str) -> None:
-    if kind == "segfault":
-        import ctypes
-
-        ctypes.string_at(0)  # NULL dereference: SIGSEGV
-    elif kind == "abort":
-        os.abort()
-
-
-def _cpu_s() -> float | None:
-    """CPU time of this process so far (a forked child's count starts at 0)."""
-    try:
-        import resource
-    except ImportError:  # pragma: no cover - Windows
-        return None
-    usage = resource.getrusage(resource.RUSAGE_SELF)
-    return usage.ru_utime + usage.ru_stime
-
-
 def child(job: dict) -> int:
     own_imports = _IMPORT_START[0] == os.getpid()  # spawned: this process imported the run's modules
     marks = {"entry_wall": _IMPORT_START[1] if own_imports else time.time()}
     faulthandler.enable()  # a fatal signal writes the Python stack to stderr.txt: where the run died
-    _die_with_parent()
+    die_with_parent()
     if os.getppid() != job["parent"]:  # the parent died before prctl took effect
         return 3
     out = pathlib.Path(job["out"])
@@ -401,19 +361,19 @@ def child(job: dict) -> int:
         marks["imported_wall"] = _IMPORTED if own_imports else time.time()
         scn = scenario.load(job["scenario"], job["overrides"], controller=job["controller"], seed=job["seed"])
         marks["loaded_wall"] = time.time()
-        crash = job.get("inject_crash")
-        if crash in ("segfault", "abort"):
-            _crash(crash)
+        kind = job.get("inject_crash")
+        if kind in ("segfault", "abort"):
+            crash(kind)
         t_run = time.time()
         watch = [ProgressFile(job["progress_file"])] if job.get("progress_file") else []
-        if crash == "segfault_mid_run":
+        if kind == "segfault_mid_run":
             watch.append(CrashAt(CRASH_AT_S))
         res = runner.run(scn, log_file=out / "sumo.log", progress=False, callbacks=watch)
         marks["sumo_start_wall"] = t_run + res.timings.get("setup_s", 0.0)  # road and controllers set up
         marks["run_end_wall"] = time.time()
         m = evaluate.write_outputs(res, out, plots=scn.spec.output.plots and job.get("plots", True))
         marks["written_wall"] = time.time()
-        finish({"status": "done", "metrics": m, "timings": res.timings, "cpu_s": _cpu_s()})
+        finish({"status": "done", "metrics": m, "timings": res.timings, "cpu_s": cpu_s()})
         return 0
     except ScenarioError as e:  # bad input found only once SUMO ran: the caller reports it as such
         finish({"status": "failed", "error": f"ScenarioError: {e}"[:500], "bad_input": str(e)})
@@ -424,35 +384,6 @@ def child(job: dict) -> int:
         return 1
 
 
-class CrashAt:
-    """Rollout callback (test-only fault injection): a real SIGSEGV once simulated time reaches ``time_s``,
-    with SUMO running."""
-
-    def __init__(self, time_s: float):
-        self.time_s = time_s
-
-    def on_step(self, snap, n_steps: int) -> None:
-        if snap.time_s >= self.time_s:
-            _crash("segfault")
-
-    def on_end(self) -> None:
-        pass
-
-
-class ProgressFile:
-    """Rollout callback: the simulated time written to a file (a fixed-width number, rewritten in
-    place at most every 0.2 s), for a parent process's progress bar."""
-
-    def __init__(self, path: str):
-        self.fd, self.last = os.open(path, os.O_WRONLY | os.O_CREAT, 0o644), 0.0
-
-    def on_step(self, snap, n_steps: int) -> None:
-        if time.monotonic() - self.last >= 0.2:
-            self.last = time.monotonic()
-            os.pwrite(self.fd, f"{snap.time_s:16.3f}".encode(), 0)
-
-    def on_end(self) -> None:
-        os.close(self.fd)
 
 
 if __name__ == "__main__":

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import itertools
 import pathlib
 import xml.etree.ElementTree as ET
 
@@ -148,7 +149,7 @@ def _check_path(f, info: NetInfo, edges, what: str, net) -> None:
     for e in edges:
         if e not in info.lanes:
             raise InputError(f, f"its edge '{e}' is not in the network {net}", what)
-    for a, b in zip(edges, edges[1:]):
+    for a, b in itertools.pairwise(edges):
         if (a, b) not in info.connections:
             raise InputError(f, f"edges '{a}' and '{b}' are not connected in the network {net}", what)
 
