@@ -80,17 +80,17 @@ def parse_seeds(text, file: str = "<command line>", key: str = "--seeds") -> tup
             raise ScenarioError(file, key, f"a non-empty list of integers in [0, {MAX_SEED}]", text)
         return tuple(sorted(set(text)))
     seeds: set[int] = set()
-    try:
-        for part in str(text).split(","):
-            a, _, b = part.strip().partition("-")
+    for part in str(text).split(","):
+        a, _, b = part.strip().partition("-")
+        try:
             lo, hi = int(a), int(b) if b else int(a)
-            if lo < 0 or hi < lo:
-                raise ValueError
-            if hi > MAX_SEED or hi - lo + 1 + len(seeds) > MAX_SEEDS:
-                raise ScenarioError(file, key, f"at most {MAX_SEEDS} seeds in [0, {MAX_SEED}]", text)
-            seeds.update(range(lo, hi + 1))
-    except ValueError:
-        raise ScenarioError(file, key, "seeds like 1-20 or 1,3,7 (non-negative, A <= B)", text) from None
+        except ValueError:
+            lo, hi = -1, -1
+        if lo < 0 or hi < lo:
+            raise ScenarioError(file, key, "seeds like 1-20 or 1,3,7 (non-negative, A <= B)", text)
+        if hi > MAX_SEED or hi - lo + 1 + len(seeds) > MAX_SEEDS:
+            raise ScenarioError(file, key, f"at most {MAX_SEEDS} seeds in [0, {MAX_SEED}]", text)
+        seeds.update(range(lo, hi + 1))
     return tuple(sorted(seeds))
 
 
