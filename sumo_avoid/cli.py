@@ -14,19 +14,26 @@ import pathlib
 import shutil
 import sys
 import tempfile
-import threading
 
 from sumo_avoid.control import CONTROLLERS
 from sumo_avoid.core.config import ScenarioError, ScenarioErrors
 from sumo_avoid.rollout import runner
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.reference import format_reference
-from sumo_avoid.studies import batch, files, report, reproduce, suite, tune, worker
+from sumo_avoid.studies import (
+    batch,
+    files,
+    isolate,
+    report,
+    reproduce,
+    suite,
+    tune,
+    worker,
+)
 from sumo_avoid.sumo import console
 
 EXIT_BAD_INPUT = 2
 EXIT_CRASHED = 3
-RUN_TIMEOUT_S = 30 * 86_400.0  # `run` has no timeout of its own: the worker's is set out of reach
 
 
 class UsageError(Exception):
@@ -77,8 +84,9 @@ def _summary(m: dict, out: pathlib.Path) -> str:
 
 
 def cmd_run(args) -> int:
-    """Validate, then run the scenario in a process of its own (the batch's worker): a SUMO crash
-    costs that process, and this one reports it in one line (exit code 3)."""
+    """Validate, then run the scenario in a child process (the batch's worker run, forked from this
+    process: studies/isolate.py): a SUMO crash costs the child, and this one reports it in one line
+    (exit code 3)."""
     scn = scenario.load(args.scenario, args.overrides, controller=args.controller, seed=args.seed)
     if args.inject_crash is not None and args.inject_crash not in worker.CRASHES:
         raise ScenarioError("<command line>", "--inject-crash", f"one of {list(worker.CRASHES)}", args.inject_crash)
@@ -116,27 +124,22 @@ def cmd_run(args) -> int:
 
 
 def _run_child(args, scn, tmp: pathlib.Path) -> dict:
-    """The run in its own process, a progress bar over its simulated time fed from a file."""
+    """The run in a child process, a progress bar over its simulated time fed from a file."""
     show = not args.quiet and sys.stdout.isatty()
     job = {"scenario": str(scn.path.resolve()), "seed": args.seed, "overrides": list(args.overrides),
            "controller": args.controller, "inject_crash": args.inject_crash, "key": "run", "plots": not args.no_plots,
            "progress_file": str(tmp / "progress") if show else None}
-    box: dict = {}
-    thread = threading.Thread(target=lambda: box.update(res=worker.run_in(tmp, job, RUN_TIMEOUT_S)), daemon=True)
     bar = runner.Progress(scn.spec.sim.duration_s) if show else None
-    thread.start()
+
+    def poll() -> None:
+        if bar is not None:
+            bar.bar.update(max(0.0, min(_sim_time(tmp / "progress"), bar.bar.total) - bar.bar.n))
+
     try:
-        while thread.is_alive():
-            thread.join(0.2)
-            if bar is not None:  # the last reading comes after the run's end
-                bar.bar.update(max(0.0, min(_sim_time(tmp / "progress"), bar.bar.total) - bar.bar.n))
-    except BaseException:  # Ctrl-C: the run's process goes too
-        worker.kill_all()
-        raise
+        res = isolate.run_forked(tmp, job, poll)
     finally:
         if bar is not None:
             bar.on_end()
-    res = box["res"]
     if res["status"] == "done":  # what the run printed besides SUMO's messages, e.g. Python warnings
         for line in console.leftover(tmp / "stderr.txt", tmp / "sumo.log"):
             print(line, file=sys.stderr)

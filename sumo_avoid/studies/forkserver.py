@@ -17,7 +17,7 @@ import time
 import traceback
 
 from sumo_avoid.sensing import occlusion
-from sumo_avoid.studies.worker import _exit_now, child
+from sumo_avoid.studies.worker import child, exit_now
 
 
 def serve(parent: int) -> int:
@@ -107,7 +107,7 @@ def _forked_child(job: dict, inherited_fds: list[int]) -> None:
     except BaseException:
         traceback.print_exc()
     finally:
-        _exit_now(rc)
+        exit_now(rc)
 
 
 if __name__ == "__main__":

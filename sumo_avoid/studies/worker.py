@@ -93,7 +93,7 @@ def kill_all() -> None:
             _SERVER.kill()  # its children get SIGKILL too (PR_SET_PDEATHSIG)
 
 
-def _now() -> str:
+def now() -> str:
     return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="milliseconds")
 
 
@@ -140,23 +140,24 @@ def run_one(spec: dict, root: str, timeout_s: float, start: str | None = None) -
 
 def run_in(tmp: pathlib.Path, spec: dict, timeout_s: float, start: str | None = None) -> dict:
     """Run one spec in its own process with ``tmp`` (an existing folder) as its output folder;
-    return its result dict (never raises for a failing run). ``sumo-avoid run`` uses this directly."""
+    return its result dict (never raises for a failing run). (``sumo-avoid run`` forks its one run
+    from its own process instead: :mod:`sumo_avoid.studies.isolate`.)"""
     start = start or default_start()
     if start not in STARTS:
         raise ValueError(f"start must be one of {STARTS}, not {start!r}")
-    started, t0 = _now(), time.perf_counter()
+    started, t0 = now(), time.perf_counter()
     job = dict(spec, out=str(pathlib.Path(tmp).absolute()), timeout_s=timeout_s, id=pathlib.Path(tmp).name)
     if start == "fork":
         status = _run_forked(job, timeout_s)
     else:
         status = _run_spawned(job, pathlib.Path(tmp), timeout_s)
-    res = _result(pathlib.Path(tmp), status, timeout_s)
-    res.update(started_at=started, ended_at=_now(), wall_s=time.perf_counter() - t0, start=start)
+    res = result_of(pathlib.Path(tmp), status, timeout_s)
+    res.update(started_at=started, ended_at=now(), wall_s=time.perf_counter() - t0, start=start)
     res["marks"]["ended_wall"] = time.time()
     return res
 
 
-def _result(tmp: pathlib.Path, status: dict, timeout_s: float) -> dict:
+def result_of(tmp: pathlib.Path, status: dict, timeout_s: float) -> dict:
     """The run's result: its result.json, or the failure its exit status tells."""
     res_file = tmp / "result.json"
     rc, timed_out = status.get("rc"), status.get("timed_out", False)
@@ -328,7 +329,7 @@ def _run_forked(job: dict, timeout_s: float) -> dict:
     return reply
 
 
-def _exit_now(rc: int) -> None:
+def exit_now(rc: int) -> None:
     """Flush stdio and exit without the interpreter's teardown: nothing in it is needed once
     result.json is written, and in a spawned worker it took 0.40 s (median, benchmarks/batch.py on
     a loaded 2-core machine) of freeing pandas, numpy, libsumo...; 0.05 s from result to reaped
@@ -345,7 +346,7 @@ def _exit_now(rc: int) -> None:
 def child(job: dict) -> int:
     own_imports = _IMPORT_START[0] == os.getpid()  # spawned: this process imported the run's modules
     marks = {"entry_wall": _IMPORT_START[1] if own_imports else time.time()}
-    faulthandler.enable()  # a fatal signal writes the Python stack to stderr.txt: where the run died
+    faulthandler.enable(file=2)  # a fatal signal writes the Python stack to stderr.txt: where the run died
     die_with_parent()
     if os.getppid() != job["parent"]:  # the parent died before prctl took effect
         return 3
@@ -387,4 +388,4 @@ def child(job: dict) -> int:
 
 
 if __name__ == "__main__":
-    _exit_now(child(json.loads(sys.argv[1])))
+    exit_now(child(json.loads(sys.argv[1])))
