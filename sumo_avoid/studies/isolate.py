@@ -15,6 +15,7 @@ import time
 import traceback
 
 from sumo_avoid.studies import worker
+from sumo_avoid.studies.watch import own_stdio
 
 
 def run_forked(tmp: pathlib.Path, spec: dict, poll=None, every_s: float = 0.2) -> dict:
@@ -53,15 +54,9 @@ def _child(job: dict) -> None:  # pragma: no cover - runs in the child
     """The forked child: its own stdio files in its folder, the run, exit (never returns)."""
     rc = 1
     try:
-        out = pathlib.Path(job["out"])
-        for fd, (path, flags) in enumerate([(os.devnull, os.O_RDONLY),
-                                            (out / "stdout.txt", os.O_WRONLY | os.O_CREAT | os.O_TRUNC),
-                                            (out / "stderr.txt", os.O_WRONLY | os.O_CREAT | os.O_TRUNC)]):
-            f = os.open(path, flags, 0o644)
-            os.dup2(f, fd)
-            os.close(f)
+        own_stdio(pathlib.Path(job["out"]))
         rc = worker.child(job)
-    except BaseException:
-        traceback.print_exc(file=open(2, "w", closefd=False))
+    except BaseException:  # whatever it was, the parent reads the exit status and stderr.txt
+        os.write(2, traceback.format_exc().encode())
     finally:
         worker.exit_now(rc)

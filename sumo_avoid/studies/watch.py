@@ -14,6 +14,17 @@ import time
 CRASH_AT_S = 1.0  # "segfault_mid_run": SIGSEGV once the simulation has run this long
 
 
+def own_stdio(out: pathlib.Path) -> None:
+    """A fresh child's stdin from /dev/null, stdout and stderr into ``out``/stdout.txt, stderr.txt
+    (file descriptors 0-2: native code, SUMO, writes there too)."""
+    for fd, (path, flags) in enumerate([(os.devnull, os.O_RDONLY),
+                                        (out / "stdout.txt", os.O_WRONLY | os.O_CREAT | os.O_TRUNC),
+                                        (out / "stderr.txt", os.O_WRONLY | os.O_CREAT | os.O_TRUNC)]):
+        f = os.open(path, flags, 0o644)
+        os.dup2(f, fd)
+        os.close(f)
+
+
 def die_with_parent() -> None:
     """Linux: get SIGKILL when the parent dies, so a killed batch leaves no orphan runs."""
     try:
