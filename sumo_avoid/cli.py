@@ -1,31 +1,55 @@
 """``sumo-avoid``: run scenarios and print their metrics.
 
-Bad input (a malformed scenario or override) prints one line to stderr naming the file, the key
-and what was expected, and exits with code 2, before anything is written.
+Bad input (a malformed scenario, override, flag or file) prints one line to stderr naming the
+file, the key and what was expected, and exits with code 2, before anything is written. Exit
+codes (docs/errors.md): 0 ok; 1 runs failed or suite criteria not met; 2 bad input; 3 the run
+crashed (SUMO died or raised mid-run); 130 interrupted.
 """
 from __future__ import annotations
 
 import argparse
 import datetime
+import json
 import pathlib
 import shutil
 import sys
 import tempfile
 
-from sumo_avoid import outputs as evaluate
 from sumo_avoid.control import CONTROLLERS
-from sumo_avoid.core.config import ScenarioError
+from sumo_avoid.core.config import ScenarioError, ScenarioErrors
 from sumo_avoid.rollout import runner
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.reference import format_reference
-from sumo_avoid.studies import batch, report, reproduce, suite, tune
+from sumo_avoid.studies import (
+    batch,
+    files,
+    isolate,
+    report,
+    reproduce,
+    suite,
+    tune,
+    worker,
+)
 from sumo_avoid.sumo import console
 
 EXIT_BAD_INPUT = 2
+EXIT_CRASHED = 3
+
+
+class UsageError(Exception):
+    """A command line argparse refuses (unknown flag, missing argument, wrong type)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, with its refusal as one line (no usage block) and exit code 2 from :func:`main`."""
+
+    def error(self, message):
+        command = self.prog.removeprefix("sumo-avoid").strip()  # "run", "batch", ... ("" for the top level)
+        raise UsageError(f"{command}: {message}" if command else message)
 
 
 def _parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="sumo-avoid", description=__doc__.splitlines()[0])
+    ap = _Parser(prog="sumo-avoid", description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="command", required=True)
     r = sub.add_parser("run", help="run one scenario, write metrics.json, trajectories.csv and plots")
     r.add_argument("scenario", type=pathlib.Path)
@@ -36,6 +60,7 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--out", type=pathlib.Path, default=None, help="output folder (default: reports/runs/NAME-...)")
     r.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
+    r.add_argument("--inject-crash", default=None, help=argparse.SUPPRESS)  # test-only fault injection
     sub.add_parser("controllers", help="list the controllers")
     sub.add_parser("keys", help="print every scenario key (Markdown table)")
     for mod in (batch, suite, report, reproduce, tune):
@@ -59,29 +84,91 @@ def _summary(m: dict, out: pathlib.Path) -> str:
 
 
 def cmd_run(args) -> int:
+    """Validate, then run the scenario in a child process (the batch's worker run, forked from this
+    process: studies/isolate.py): a SUMO crash costs the child, and this one reports it in one line
+    (exit code 3)."""
     scn = scenario.load(args.scenario, args.overrides, controller=args.controller, seed=args.seed)
+    if args.inject_crash is not None and args.inject_crash not in worker.CRASHES:
+        raise ScenarioError("<command line>", "--inject-crash", f"one of {list(worker.CRASHES)}", args.inject_crash)
     out = args.out
     if out is None:
         stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
         out = pathlib.Path("reports") / "runs" / f"{scn.name}-{scn.spec.ego.controller}-s{scn.spec.sim.seed}-{stamp}"
-    with tempfile.TemporaryDirectory(prefix="sumo-avoid-run-") as tmp:  # nothing in OUT until the run is good
-        log, native = pathlib.Path(tmp) / "sumo.log", pathlib.Path(tmp) / "stderr.txt"
-        try:
-            with console.sumo_console_to(native):  # SUMO's warnings: sumo.log only, counted below
-                res = runner.run(scn, log_file=log, progress=not args.quiet and sys.stdout.isatty())
-        finally:
-            for line in console.leftover(native, log):
-                print(line, file=sys.stderr)
-        out.mkdir(parents=True, exist_ok=True)
-        shutil.move(log, out / "sumo.log")
-    m = evaluate.write_outputs(res, out, plots=scn.spec.output.plots and not args.no_plots)
-    print(_summary(m, out))
+    made = files.make_dirs(out, "--out")  # refused now, not after the run
+    try:
+        with tempfile.TemporaryDirectory(prefix="sumo-avoid-run-") as tmp:
+            res = _run_child(args, scn, pathlib.Path(tmp))
+            if res["status"] == "done":
+                _keep(pathlib.Path(tmp), out)
+            elif "bad_input" not in res:  # crashed: the log and a failure record, never metrics
+                _keep(pathlib.Path(tmp), out, only=("sumo.log",))
+                files.write_atomic(out / "failed.json", json.dumps(
+                    {"status": "failed", "error": res["error"], "where": res.get("where"), "scenario": str(scn.path),
+                     "seed": scn.spec.sim.seed,
+                     "controller": scn.spec.ego.controller}, indent=2, sort_keys=True) + "\n")
+    except BaseException:
+        files.remove_dirs(made)
+        raise
+    if "bad_input" in res:  # input SUMO refused only once it ran: nothing written
+        files.remove_dirs(made)
+        print(f"sumo-avoid: error: {res['bad_input']}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if res["status"] != "done":
+        where = f" at {res['where']}" if res.get("where") else ""
+        print(f"sumo-avoid: error: {scn.path}: the run crashed: {res['error']}{where} (seed {scn.spec.sim.seed}; "
+              f"SUMO's log: {out / 'sumo.log'}, failure record: {out / 'failed.json'})", file=sys.stderr)
+        return EXIT_CRASHED
+    print(_summary(res["metrics"], out))
     print(f"  {console.summary_line(out / 'sumo.log')}")
     return 0
 
 
+def _run_child(args, scn, tmp: pathlib.Path) -> dict:
+    """The run in a child process, a progress bar over its simulated time fed from a file."""
+    show = not args.quiet and sys.stdout.isatty()
+    job = {"scenario": str(scn.path.resolve()), "seed": args.seed, "overrides": list(args.overrides),
+           "controller": args.controller, "inject_crash": args.inject_crash, "key": "run", "plots": not args.no_plots,
+           "progress_file": str(tmp / "progress") if show else None}
+    bar = runner.Progress(scn.spec.sim.duration_s) if show else None
+
+    def poll() -> None:
+        if bar is not None:
+            bar.bar.update(max(0.0, min(_sim_time(tmp / "progress"), bar.bar.total) - bar.bar.n))
+
+    try:
+        res = isolate.run_forked(tmp, job, poll)
+    finally:
+        if bar is not None:
+            bar.on_end()
+    if res["status"] == "done":  # what the run printed besides SUMO's messages, e.g. Python warnings
+        for line in console.leftover(tmp / "stderr.txt", tmp / "sumo.log"):
+            print(line, file=sys.stderr)
+    return res
+
+
+def _sim_time(path: pathlib.Path) -> float:
+    try:
+        return float(path.read_bytes() or 0.0)
+    except (OSError, ValueError):
+        return 0.0
+
+
+_RUN_FILES = ("result.json", "stdout.txt", "stderr.txt", "progress")
+
+
+def _keep(tmp: pathlib.Path, out: pathlib.Path, only=None) -> None:
+    """Move the run's outputs from its private folder into ``out``."""
+    for f in sorted(tmp.iterdir()):
+        if f.name not in _RUN_FILES and (only is None or f.name in only):
+            shutil.move(str(f), str(out / f.name))
+
+
 def main(argv=None) -> int:
-    args = _parser().parse_args(argv)
+    try:
+        args = _parser().parse_args(argv)
+    except UsageError as e:
+        print(f"sumo-avoid: error: <command line>: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     try:
         if args.command == "run":
             return cmd_run(args)
@@ -94,6 +181,13 @@ def main(argv=None) -> int:
         if args.command == "keys":
             print(format_reference())
             return 0
+    except KeyboardInterrupt:
+        print("sumo-avoid: interrupted", file=sys.stderr)
+        return 130
+    except ScenarioErrors as e:  # every bad input of a batch, one line each
+        for err in e.errors:
+            print(f"sumo-avoid: error: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except ScenarioError as e:
         cause = f" (SUMO: {e.__cause__})" if e.__cause__ is not None else ""
         print(f"sumo-avoid: error: {e}{cause}", file=sys.stderr)

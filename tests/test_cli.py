@@ -123,8 +123,9 @@ def test_an_unknown_edge_in_a_trip_names_the_route_file_and_the_trip(tmp_path):
     r = cli("run", path, "--out", out)
     assert r.returncode == 2
     line, = r.stderr.strip().splitlines()
-    assert line.startswith(f"sumo-avoid: error: {path}: key 'sim.routes[1]': expected a file SUMO can load: "
-                           f"{tmp_path / 'trips.rou.xml'}, trip 't7' (SUMO: The edge 'nope' within the route for trip 't7'")
+    assert line == (f"sumo-avoid: error: {path}: key 'sim.routes[1]': expected a file SUMO can load: "
+                    f"{tmp_path / 'trips.rou.xml'}, trip 't7': its from edge 'nope' is not in the network "
+                    f"{NETS / 'overtaking.net.xml'}")  # found before SUMO starts (sumo/inputs.py)
     assert not out.exists()
 
 
@@ -145,23 +146,24 @@ def test_an_ego_that_never_departs_exits_2_and_writes_nothing(tmp_path):
     out.mkdir()  # an existing folder stays as it was: empty
     r = cli("run", path, "--out", out, "--quiet")
     assert r.returncode == 2, r.stderr
-    assert r.stderr.strip().splitlines() == [
-        (f"sumo-avoid: error: {path}: key 'ego.ids[1]': expected egos that depart within the run: 'late' never "
-         "departed by t=3.0 s (its depart time is later, or SUMO dropped it)")]
+    assert r.stderr.strip().splitlines() == [  # found from the route file, before SUMO starts
+        (f"sumo-avoid: error: {path}: key 'ego.ids[1]': expected egos that depart within the run: 'late' departs "
+         "at t=60 s, the run ends at sim.duration_s = 3 s")]
     assert list(out.iterdir()) == []
     r = cli("run", path, "--out", tmp_path / "ok", "--quiet", "--no-plots", "--set", "sim.duration_s=61")
     assert r.returncode == 0, r.stderr  # it departs at 60 s: a normal run
 
 
 def test_input_sumo_rejects_only_mid_run_exits_2_naming_the_file_and_writes_nothing(tmp_path):
-    """An invalid departLane passes SUMO's load and stops it only when it inserts the vehicle."""
+    """An invalid departLane passes SUMO's load and would stop it only when it inserts the vehicle:
+    it is found before SUMO starts."""
     path = _road_scenario(tmp_path, "lane", '<trip id="ego" from="road" to="road" depart="1" departLane="7"/>', ["ego"])
     out = tmp_path / "out"
     r = cli("run", path, "--out", out, "--quiet")
     assert r.returncode == 2, r.stderr
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"sumo-avoid: error: {path}: key 'sim.routes[0]': "), lines
-    assert "departLane" in lines[0] and "vehicle 'ego'" in lines[0]
+    assert "departLane 7 does not exist" in lines[0] and "trip 'ego'" in lines[0]
     assert not out.exists()
 
 

@@ -30,7 +30,7 @@ import numpy as np
 
 from sumo_avoid.control.apf import ApfController, ApfParams
 from sumo_avoid.control.road_view import FrenetScene, RoadView
-from sumo_avoid.core.config import field_doc
+from sumo_avoid.core.config import FieldError, field_doc
 from sumo_avoid.core.geometry import footprint_corners
 from sumo_avoid.core.types import EgoTask, Observation
 
@@ -55,6 +55,10 @@ class ApfSaParams(ApfParams):
     escape_room_m: float = field_doc(12.0, doc="when blocked, back up until this much room is free ahead, m")
     escape_reverse_speed_mps: float = field_doc(1.5, doc="speed while backing up, m/s")
     escape_margin_m: float = field_doc(0.5, doc="the escape target keeps the car this far from road edges, m")
+
+    def __post_init__(self):
+        if not 0.0 < self.sa_cooling < 1.0:
+            raise FieldError("sa_cooling", "a cooling factor in (0, 1) (T shrinks each draw)", self.sa_cooling)
 
 
 @dataclass

@@ -33,6 +33,17 @@ def _rebuild_error(file, key, expected, got, show_got) -> ScenarioError:
     return ScenarioError(file, key, expected, got, show_got=show_got)
 
 
+class ScenarioErrors(ValueError):
+    """Several bad inputs found at once (a batch names them all before it runs): one line each."""
+
+    def __init__(self, errors):
+        self.errors = list(errors)
+        super().__init__("\n".join(str(e) for e in self.errors))
+
+    def __reduce__(self):
+        return ScenarioErrors, (self.errors,)
+
+
 class FieldError(ValueError):
     """Raised by a config dataclass's ``__post_init__``: field ``key`` (relative to the table)
     is wrong; ``expected`` says what it should be. :func:`build` adds the file and the prefix."""

@@ -52,10 +52,11 @@ def never_departed_error(scn, missing: list[str], time_s: float, waiting) -> Sce
                                              f"t={time_s:.1f} s ({why}){more}", show_got=False)
 
 
-def run(scn, *, log_file=None, progress: bool = False) -> RunResult:
+def run(scn, *, log_file=None, progress: bool = False, callbacks=()) -> RunResult:
     """Run one scenario. Raises :class:`ScenarioError` (one line, naming the scenario file and key)
     for input found bad only once SUMO runs: files SUMO cannot load (at the start or when it gets to
-    an element, e.g. an invalid departLane), a goal edge not on an ego's route, an ego that never departed."""
+    an element, e.g. an invalid departLane), a goal edge not on an ego's route, an ego that never departed.
+    ``callbacks``: more rollout callbacks (``on_step``, ``on_end``) beside the progress bar."""
     spec = scn.spec
     t_start = time.perf_counter()
     arena = spec.arena
@@ -86,7 +87,7 @@ def run(scn, *, log_file=None, progress: bool = False) -> RunResult:
                 hook.setup(sim)
             try:
                 steps = rollout(sim, stack, egos, recorder, int(round(spec.sim.duration_s / sim.step_s)),
-                                [Progress(spec.sim.duration_s)] if progress else [])
+                                ([Progress(spec.sim.duration_s)] if progress else []) + list(callbacks))
             except FieldError as e:  # a goal edge not on the route SUMO gave the ego
                 raise ScenarioError(str(scn.path), e.key, e.expected, e.got, show_got=e.show_got) from None
             except SumoStepError as e:  # input SUMO rejects only when it gets to it

@@ -7,12 +7,9 @@ dataclasses below by ``python -m sumo_avoid.scenario.reference``).
 """
 from __future__ import annotations
 
-import functools
-import math
 import pathlib
 import re
 import sys
-import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -25,10 +22,24 @@ from sumo_avoid.metrics import METRICS
 from sumo_avoid.safety import LAYERS, RULES
 from sumo_avoid.safety.danger_time import DangerTimeParams
 from sumo_avoid.safety.rules import RulesParams
+from sumo_avoid.scenario.checks import (
+    DEFINED,
+    SAME_KIND,
+    check_arena,
+    check_ego_ids,
+    check_ego_keys,
+    check_goals,
+    check_sumo_inputs,
+    elements,
+    is_convex,
+)
 from sumo_avoid.scenario.obstacles import RandomObstaclesConfig, draw
 from sumo_avoid.sensing import SENSORS
 from sumo_avoid.sensing.radar import RadarParams
-from sumo_avoid.sumo.road import Road
+
+MIN_STEP_S, MAX_STEP_S = 0.001, 10.0  # SUMO counts time in ms
+MAX_DURATION_S = 86_400.0  # one simulated day: a longer run is a typo, not a study
+MAX_SEED = 2**31 - 1
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -50,10 +61,17 @@ class SimConfig:
                                                 "check (always off in an [arena])")
 
     def __post_init__(self):
-        if self.step_s <= 0 or self.duration_s <= 0:
-            raise ValueError("sim.step_s and sim.duration_s > 0")
+        if not MIN_STEP_S <= self.step_s <= MAX_STEP_S or abs(self.step_s * 1000 - round(self.step_s * 1000)) > 1e-6:
+            raise FieldError("step_s", f"a step in [{MIN_STEP_S}, {MAX_STEP_S}] s, a whole number of ms (SUMO's time "
+                                       "resolution)", self.step_s)
+        if not 0 < self.duration_s <= MAX_DURATION_S:
+            raise FieldError("duration_s", f"a duration in (0, {MAX_DURATION_S:g}] s", self.duration_s)
+        if self.step_s > self.duration_s:
+            raise FieldError("step_s", f"a step no longer than sim.duration_s ({self.duration_s} s)", self.step_s)
+        if not 0 <= self.seed <= MAX_SEED:
+            raise FieldError("seed", f"an integer in [0, {MAX_SEED}] (SUMO's seed is a 32-bit integer)", self.seed)
         if self.lateral_resolution_m <= 0:
-            raise ValueError("sim.lateral_resolution_m > 0")
+            raise FieldError("lateral_resolution_m", "a positive width, m", self.lateral_resolution_m)
 
 
 @dataclass(frozen=True)
@@ -92,8 +110,8 @@ class ArenaConfig:
     min_spacing_m: float = field_doc(6.0, doc="smallest distance between two start positions, m")
     margin_m: float = field_doc(5.0, doc="start positions keep this far from walls and obstacles, m")
     initial_speed_mps: float = field_doc(0.0, doc="initial speed (random heading), m/s")
-    length_m: float = field_doc(4.0, doc="vehicle length, m")
-    width_m: float = field_doc(1.8, doc="vehicle width, m")
+    length_m: float = field_doc(4.0, positive=True, doc="vehicle length, m")
+    width_m: float = field_doc(1.8, positive=True, doc="vehicle width, m")
     id_prefix: str = field_doc("f", doc="vehicle ids are PREFIX0 .. PREFIX(N-1)")
     starts: tuple[tuple[float, ...], ...] = field_doc((), signed=True, doc="[[x, y], ...] fixed start centres, one "
                                                                            "per agent, m (default: random)")
@@ -120,7 +138,10 @@ class ObstacleConfig:
 
     def __post_init__(self):
         if len(self.shape) < 3 or any(len(p) != 2 for p in self.shape):
-            raise ValueError(f"obstacle {self.id}: shape needs >= 3 points [x, y]")
+            raise FieldError("shape", ">= 3 points [x, y]", [list(p) for p in self.shape])
+        if not is_convex(self.polygon):
+            raise FieldError("shape", "a convex polygon with a non-zero area (corners in order, no three on a line)",
+                             [list(p) for p in self.shape])
 
     @property
     def polygon(self) -> np.ndarray:
@@ -156,7 +177,21 @@ class ScenarioSpec:
 
     def __post_init__(self):
         if not self.ego.ids and (self.arena is None or self.arena.n_agents == 0):
-            raise ValueError("at least one ego id in ego.ids (or an [arena] table)")
+            raise FieldError("ego.ids", "at least one ego id (or an [arena] table with n_agents > 0)", [])
+        for key, ids in (("ego.ids", self.ego.ids), ("obstacles", [o.id for o in self.obstacles])):
+            dup = _first_duplicate(ids)
+            if dup is not None:
+                raise FieldError(f"{key}[{dup}]" + (".id" if key == "obstacles" else ""),
+                                 "ids used once (this one is used before)", ids[dup])
+
+
+def _first_duplicate(ids) -> int | None:
+    seen = set()
+    for i, v in enumerate(ids):
+        if v in seen:
+            return i
+        seen.add(v)
+    return None
 
 
 @dataclass(frozen=True)
@@ -220,6 +255,11 @@ def read_toml(path: pathlib.Path) -> dict:
             return tomllib.load(fh)
     except tomllib.TOMLDecodeError as e:
         raise ScenarioError(file, "<syntax>", f"valid TOML ({e})", show_got=False) from None
+    except UnicodeDecodeError as e:
+        raise ScenarioError(file, "<syntax>", f"a UTF-8 text file (TOML), not binary ({e.reason} at byte "
+                            f"{e.start})", show_got=False) from None
+    except OSError as e:
+        raise ScenarioError(file, "<file>", f"a readable file ({e.strerror})", show_got=False) from None
 
 
 def load(path, overrides: list[str] = (), controller: str | None = None, seed: int | None = None) -> Scenario:
@@ -260,8 +300,12 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     net = existing(spec.sim.net, "sim.net", "SUMO network")
     routes = tuple(existing(r, f"sim.routes[{i}]", "SUMO route") for i, r in enumerate(spec.sim.routes))
     adds = tuple(existing(r, f"sim.additional[{i}]", "SUMO additional") for i, r in enumerate(spec.sim.additional))
-    _check_ego_ids(spec.ego.ids, routes + adds, file)
-    _check_goals(spec, net, file)
+    check_sumo_inputs(spec, net, routes, adds, file)
+    check_ego_ids(spec, routes + adds, file)
+    check_goals(spec, net, file)
+    check_ego_keys(spec, params, file)
+    if spec.arena is not None:
+        check_arena(spec, file)
     return Scenario(spec, path, net, routes, adds, params)
 
 
@@ -276,87 +320,6 @@ def _with_random_obstacles(spec: ScenarioSpec, file: str) -> ScenarioSpec:
     return replace(spec, obstacles=spec.obstacles + drawn)
 
 
-def _check_goals(spec: ScenarioSpec, net: pathlib.Path, file: str) -> None:
-    """Per-ego goals name egos; a point goal lies on the drivable area; an edge goal is a normal
-    edge of the net (whether it is on the ego's route is known when SUMO has routed the ego)."""
-    egos = (*spec.ego.ids, *(spec.arena.ids if spec.arena is not None else ()))
-    for vid in spec.ego.goals:
-        if vid not in egos:
-            raise ScenarioError(file, f"ego.goals.{vid}", f"an ego id (ego.ids: {list(spec.ego.ids)})", vid,
-                                show_got=False)
-    goals = [("ego.goal", spec.ego.goal)] + [(f"ego.goals.{v}", g) for v, g in spec.ego.goals.items()]
-    for key, goal in goals:
-        if isinstance(goal, str):
-            st = net.stat()
-            if goal not in _edges_in(str(net), st.st_mtime_ns, st.st_size):
-                raise ScenarioError(file, key, f"an edge id of the network {spec.sim.net}", goal)
-        elif goal is not None and spec.arena is not None:  # an open field: the goal lies inside the walls
-            (x0, y0), size = spec.arena.origin, spec.arena.size_m
-            if not (x0 <= goal[0] <= x0 + size and y0 <= goal[1] <= y0 + size):
-                raise ScenarioError(file, key, f"a point inside the arena [{x0}, {x0 + size}] x [{y0}, {y0 + size}]",
-                                    list(goal))
-        elif goal is not None:
-            try:
-                road = Road.from_net_file(net)
-            except Exception as e:  # sumolib raises many kinds
-                raise ScenarioError(file, "sim.net", f"a readable SUMO network ({type(e).__name__})",
-                                    spec.sim.net) from None
-            off = float(road.outside_distance([goal])[0])
-            if not math.isfinite(off) or off > 0.5:
-                raise ScenarioError(file, key, f"a point on the network's drivable area ({off:.1f} m off it)",
-                                    list(goal))
-
-
-@functools.lru_cache(maxsize=16)
-def _edges_in(path: str, mtime_ns: int, size: int) -> frozenset[str]:
-    """Ids of the normal (not internal) edges of a SUMO network, parsed once per version."""
-    out = set()
-    try:
-        for _, el in ET.iterparse(path):
-            kind = el.attrib.get("function", "normal")
-            if el.tag == "edge" and "id" in el.attrib and kind not in ("internal", "crossing", "walkingarea"):
-                out.add(el.attrib["id"])
-            el.clear()
-    except (ET.ParseError, OSError):
-        pass
-    return frozenset(out)
-
-
-_DEFINED = ("vehicle", "trip", "flow", "route", "person", "container")
-_SAME_KIND = {"vehicle": ("vehicle", "trip"), "trip": ("trip", "vehicle")}
-
-
-@functools.lru_cache(maxsize=64)
-def _elements_in(path: str, mtime_ns: int, size: int) -> frozenset[tuple[str, str]]:
-    """(tag, id) of the vehicles, trips, flows and routes of one SUMO route/additional file, parsed
-    once per version (a batch loads the same scenario for every seed); a file that is not XML is
-    left for SUMO to reject (with its own reason) when the run starts."""
-    out = set()
-    try:
-        for _, el in ET.iterparse(path):
-            if el.tag in _DEFINED and "id" in el.attrib:
-                out.add((el.tag, el.attrib["id"]))
-            el.clear()
-    except (ET.ParseError, OSError):
-        pass
-    return frozenset(out)
-
-
-def _elements(f) -> frozenset[tuple[str, str]]:
-    st = pathlib.Path(f).stat()
-    return _elements_in(str(f), st.st_mtime_ns, st.st_size)
-
-
-def _defined_vehicles(files) -> tuple[set[str], set[str]]:
-    """(vehicle and trip ids, flow ids) of the files."""
-    ids, flows = set(), set()
-    for f in files:
-        els = _elements(f)
-        ids |= {vid for tag, vid in els if tag in ("vehicle", "trip")}
-        flows |= {vid for tag, vid in els if tag == "flow"}
-    return ids, flows
-
-
 def sumo_load_error(scn: Scenario, message: str) -> ScenarioError:
     """SUMO's refusal to load the scenario's files as one line naming the file: when SUMO's message
     names a trip, vehicle, flow or route (e.g. "The edge 'x' within the route for trip 't' is not
@@ -364,23 +327,13 @@ def sumo_load_error(scn: Scenario, message: str) -> ScenarioError:
     sumo = " ".join(message.split())
     keyed = [(f"sim.routes[{i}]", f) for i, f in enumerate(scn.route_files)]
     keyed += [(f"sim.additional[{i}]", f) for i, f in enumerate(scn.additional_files)]
-    for tag, eid in re.findall(r"\b(" + "|".join(_DEFINED) + r") '([^']*)'", sumo):
-        kinds = _SAME_KIND.get(tag, (tag,))  # SUMO calls a <trip> a vehicle once it is inserted
+    for tag, eid in re.findall(r"\b(" + "|".join(DEFINED) + r") '([^']*)'", sumo):
+        kinds = SAME_KIND.get(tag, (tag,))  # SUMO calls a <trip> a vehicle once it is inserted
         for key, f in keyed:
-            if any((k, eid) in _elements(f) for k in kinds):
+            if any((k, eid) in elements(f) for k in kinds):
                 return ScenarioError(str(scn.path), key, f"a file SUMO can load: {f}, {tag} '{eid}' (SUMO: {sumo})",
                                      show_got=False)
     return ScenarioError(str(scn.path), "sim", f"files SUMO can load (SUMO: {sumo})", show_got=False)
-
-
-def _check_ego_ids(ego_ids, files, file: str) -> None:
-    """Every ego id is a vehicle or trip of the route files (or a vehicle of a flow, FLOW.N)."""
-    if not ego_ids:
-        return
-    ids, flows = _defined_vehicles(files)
-    for i, vid in enumerate(ego_ids):
-        if vid not in ids and vid.rpartition(".")[0] not in flows:
-            raise ScenarioError(file, f"ego.ids[{i}]", "the id of a <vehicle> or <trip> in the route files", vid)
 
 
 def with_spec(scn: Scenario, **changes) -> Scenario:

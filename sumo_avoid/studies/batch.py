@@ -14,6 +14,7 @@ import concurrent.futures as cf
 import hashlib
 import itertools
 import json
+import math
 import os
 import pathlib
 import shutil
@@ -23,15 +24,16 @@ from dataclasses import dataclass, field
 
 from tqdm import tqdm
 
-from sumo_avoid.core.config import ScenarioError, build
+from sumo_avoid.core.config import ScenarioError, ScenarioErrors, build
 from sumo_avoid.scenario import spec as scenario
-from sumo_avoid.scenario.spec import read_toml
+from sumo_avoid.scenario.spec import MAX_SEED, read_toml
 from sumo_avoid.studies import ledger as ledger_mod
 from sumo_avoid.studies import worker
 from sumo_avoid.studies.files import BatchFile
 from sumo_avoid.studies.worker import CRASHES, kill_all, run_one
 
 KEY_VERSION = b"sumo_avoid-run-key-v1"
+MAX_SEEDS = 100_000  # seeds of one --seeds / seeds value: more is a typo (0-1000000000), not a study
 
 
 @dataclass(frozen=True)
@@ -48,6 +50,7 @@ class RunSpec:
     effective_controller: str = ""
     net_file: str = ""
     plots: bool = True  # the run writes plots (output.plots)
+    bad_input: str | None = None  # --keep-going: the input's error; the run is recorded failed, never started
 
     def to_json(self) -> dict:
         return {"scenario": self.scenario, "seed": self.seed, "overrides": list(self.overrides),
@@ -71,21 +74,23 @@ def parse_seeds(text, file: str = "<command line>", key: str = "--seeds") -> tup
     if isinstance(text, bool):
         raise ScenarioError(file, key, "seeds like 1-20 or 1,3,7 or a list of integers", text)
     if isinstance(text, int):
-        return (text,)
+        return parse_seeds([text], file, key)
     if isinstance(text, (list, tuple)):
-        if not text or not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in text):
-            raise ScenarioError(file, key, "a non-empty list of non-negative integers", text)
+        if not text or not all(isinstance(s, int) and not isinstance(s, bool) and 0 <= s <= MAX_SEED for s in text):
+            raise ScenarioError(file, key, f"a non-empty list of integers in [0, {MAX_SEED}]", text)
         return tuple(sorted(set(text)))
     seeds: set[int] = set()
-    try:
-        for part in str(text).split(","):
-            a, _, b = part.strip().partition("-")
+    for part in str(text).split(","):
+        a, _, b = part.strip().partition("-")
+        try:
             lo, hi = int(a), int(b) if b else int(a)
-            if lo < 0 or hi < lo:
-                raise ValueError
-            seeds.update(range(lo, hi + 1))
-    except ValueError:
-        raise ScenarioError(file, key, "seeds like 1-20 or 1,3,7 (non-negative, A <= B)", text) from None
+        except ValueError:
+            lo, hi = -1, -1
+        if lo < 0 or hi < lo:
+            raise ScenarioError(file, key, "seeds like 1-20 or 1,3,7 (non-negative, A <= B)", text)
+        if hi > MAX_SEED or hi - lo + 1 + len(seeds) > MAX_SEEDS:
+            raise ScenarioError(file, key, f"at most {MAX_SEEDS} seeds in [0, {MAX_SEED}]", text)
+        seeds.update(range(lo, hi + 1))
     return tuple(sorted(seeds))
 
 
@@ -154,6 +159,10 @@ def load_batch_file(path) -> tuple[list[RunSpec], dict]:
     for i, e in enumerate(bf.runs):
         seeds = parse_seeds(e.seeds, file, f"runs[{i}].seeds")
         scn = (path.resolve().parent / e.scenario)
+        if not scn.is_file():
+            raise ScenarioError(file, f"runs[{i}].scenario", "an existing scenario file", e.scenario)
+        if e.inject_crash is not None and e.inject_crash not in CRASHES:
+            raise ScenarioError(file, f"runs[{i}].inject_crash", f"one of {list(CRASHES)}", e.inject_crash)
         for s in expand([scn], seeds, e.set, e.controllers or (None,), e.grid, e.inject_crash):
             if s.key not in seen:
                 seen.add(s.key)
@@ -251,6 +260,11 @@ def run_batch(cfg: BatchConfig, progress: bool | None = None, log=print) -> dict
         bar = _Progress(len(todo), progress)
         results = _dask_results if cfg.scheduler else _local_results
         try:
+            for spec in (s for s in todo if s.bad_input is not None):  # --keep-going: failed with their cause
+                ledger_mod.record(con, _row(spec, {"status": "failed", "error": f"bad input: {spec.bad_input}"}, root))
+                counts["failed"] += 1
+                bar.update(False)
+            todo = [s for s in todo if s.bad_input is None]
             for spec, res in results(todo, root, cfg):
                 ledger_mod.record(con, _row(spec, res, root), res.get("metrics"))
                 counts[res["status"]] += 1
@@ -279,6 +293,8 @@ def add_parser(sub) -> None:
     b.add_argument("--scheduler", default=None, metavar="ADDRESS", help="run on a Dask cluster, e.g. tcp://host:8786")
     b.add_argument("--timeout", type=float, default=None, help="per-run timeout, s (default 600)")
     b.add_argument("--retry-failed", action="store_true", help="re-run runs recorded as failed")
+    b.add_argument("--keep-going", action="store_true", help="bad scenarios do not stop the batch: each is recorded "
+                                                             "failed with its cause and the good runs run")
     b.add_argument("--start", default=None, metavar="fork|spawn",
                    help="how each run's process starts: fork (from a warm fork server; default on Linux) "
                         "or spawn (a fresh interpreter per run)")
@@ -291,39 +307,69 @@ def _is_batch_file(path: pathlib.Path) -> bool:
 
 
 def config_from_args(args) -> BatchConfig:
+    """The batch the command line asks for. Every bad input is found before anything runs: raised
+    together (:class:`ScenarioErrors`), or with ``--keep-going`` kept as runs that fail with their cause."""
+    _check_flags(args)
     opts: dict = {}
+    bad: list[ScenarioError] = []
     if len(args.inputs) == 1 and _is_batch_file(args.inputs[0]):
         if args.seeds or args.overrides or args.controllers:
             raise ScenarioError(str(args.inputs[0]), "--seeds/--set/--controller",
                                 "these only with scenario files; a batch file sets them per [[runs]]", show_got=False)
         specs, opts = load_batch_file(args.inputs[0])
     else:
-        for p in args.inputs:
-            if _is_batch_file(p):
-                raise ScenarioError(str(p), "runs", "a batch file on its own (one batch file, no scenarios)",
-                                    show_got=False)
         seeds = parse_seeds(args.seeds) if args.seeds else (None,)
         specs = []
         for p in args.inputs:
+            try:
+                if _is_batch_file(p):
+                    raise ScenarioError(str(p), "runs", "a batch file on its own (one batch file, no scenarios)",
+                                        show_got=False)
+            except ScenarioError as e:
+                bad.append(e)
+                specs += [_bad_run(p, seed, args.overrides, ctl, e) for seed in seeds for ctl in args.controllers or [None]]
+                continue
             for seed in seeds:
                 for ctl in (args.controllers or [None]):
-                    s = plan(p, seed, tuple(args.overrides), ctl)
+                    try:
+                        s = plan(p, seed, tuple(args.overrides), ctl)
+                    except ScenarioError as e:
+                        bad.append(e)
+                        s = _bad_run(p, seed, args.overrides, ctl, e)
                     if s.key not in {x.key for x in specs}:
                         specs.append(s)
+    if bad and not args.keep_going:
+        unique = list({str(e): e for e in bad}.values())
+        raise unique[0] if len(unique) == 1 else ScenarioErrors(unique)
+    kw = {"workers": args.workers or opts.get("workers") or os.cpu_count() or 1,
+          "timeout_s": args.timeout or opts.get("timeout_s", 600.0)}
+    led = args.ledger or opts.get("ledger") or pathlib.Path("reports/batch/ledger.sqlite")
+    ledger_mod.check(led, "--ledger")
+    return BatchConfig(tuple(specs), pathlib.Path(led), scheduler=args.scheduler, retry_failed=args.retry_failed,
+                       start=args.start, **kw)
+
+
+def _check_flags(args) -> None:
     if args.workers is not None and args.workers < 1:
         raise ScenarioError("<command line>", "--workers", "a positive integer", args.workers)
-    if args.timeout is not None and args.timeout <= 0:
+    if args.timeout is not None and not 0 < args.timeout < math.inf:
         raise ScenarioError("<command line>", "--timeout", "a positive number of seconds", args.timeout)
     if args.start is not None and args.start not in worker.STARTS:
         raise ScenarioError("<command line>", "--start", "fork or spawn", args.start)
     if args.start == "fork" and not args.scheduler and worker.default_start() != "fork":
         raise ScenarioError("<command line>", "--start", "spawn: this system has no fork server (Linux with pidfd)",
                             args.start)
-    kw = {"workers": args.workers or opts.get("workers") or os.cpu_count() or 1,
-          "timeout_s": args.timeout or opts.get("timeout_s", 600.0)}
-    led = args.ledger or opts.get("ledger") or pathlib.Path("reports/batch/ledger.sqlite")
-    return BatchConfig(tuple(specs), pathlib.Path(led), scheduler=args.scheduler, retry_failed=args.retry_failed,
-                       start=args.start, **kw)
+
+
+def _bad_run(path, seed, overrides, controller, err: ScenarioError) -> RunSpec:
+    """A run whose input is bad (``--keep-going``): recorded failed with the cause, never started. Its key
+    covers the path, the arguments and the cause (there may be no file content to hash)."""
+    path = pathlib.Path(path).resolve()
+    h = hashlib.sha256(KEY_VERSION + b"bad-input")
+    h.update(json.dumps({"path": str(path), "seed": seed, "overrides": list(overrides), "controller": controller,
+                         "error": str(err)}, sort_keys=True).encode())
+    return RunSpec(str(path), seed if seed is not None else -1, tuple(overrides), controller, None, h.hexdigest(),
+                   path.stem, controller or "", "", False, bad_input=str(err))
 
 
 def cmd_batch(args) -> int:

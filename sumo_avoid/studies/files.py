@@ -1,14 +1,18 @@
 """The batch and suite file formats, as frozen dataclasses validated by :func:`core.config.build`,
 the same mechanism as scenario files (one error form: file, dotted key, what was expected).
 
-Seeds are kept as written (``"1-20"``, ``7`` or ``[1, 3]``) and expanded by
+Also the checks of output paths (a folder made before the runs, a file path that can be written
+after them) and atomic writes. Seeds are kept as written (``"1-20"``, ``7`` or ``[1, 3]``) and expanded by
 :func:`sumo_avoid.studies.batch.parse_seeds`; paths are relative to the file that names them.
 """
 from __future__ import annotations
 
+import contextlib
+import os
+import pathlib
 from dataclasses import dataclass
 
-from sumo_avoid.core.config import FieldError, field_doc
+from sumo_avoid.core.config import FieldError, ScenarioError, field_doc
 
 Seeds = str | int | tuple[int, ...]
 
@@ -73,3 +77,72 @@ class SuiteFile:
             if e.name in seen:
                 raise FieldError(f"entry[{i}].name", "a name not used by another entry", e.name)
             seen.add(e.name)
+
+
+# --- output paths: checked before any run starts, written atomically ---------------------------------
+CL = "<command line>"
+
+
+def make_dirs(path, flag: str) -> list[pathlib.Path]:
+    """Create the output folder ``path`` (and its missing parents) now, before anything runs; return
+    the folders created, for :func:`remove_dirs` if the command then fails. Raises ScenarioError
+    naming ``flag`` if ``path`` is a file, lies under a file or cannot be created."""
+    path = pathlib.Path(path)
+    if path.exists() and not path.is_dir():
+        raise ScenarioError(CL, flag, "a folder (this is a file)", str(path))
+    missing, p = [], path.absolute()
+    while not p.exists():
+        missing.append(p)
+        p = p.parent
+    if not p.is_dir():
+        raise ScenarioError(CL, flag, f"a folder path ({p} is a file)", str(path))
+    made: list[pathlib.Path] = []
+    try:
+        for d in reversed(missing):
+            d.mkdir()
+            made.append(d)
+    except OSError as e:
+        remove_dirs(made)
+        raise ScenarioError(CL, flag, f"a folder that can be created ({e.strerror})", str(path)) from None
+    if not os.access(path, os.W_OK | os.X_OK):
+        remove_dirs(made)
+        raise ScenarioError(CL, flag, "a folder this user can write", str(path))
+    return made
+
+
+def remove_dirs(made) -> None:
+    """Remove the folders :func:`make_dirs` created, deepest first, those still empty."""
+    for d in reversed(list(made)):
+        with contextlib.suppress(OSError):
+            d.rmdir()
+
+
+def check_out_file(path, flag: str) -> None:
+    """A file to be written later (after the runs): not a folder, and under a folder that exists or
+    can be created (no file on the way). Raises ScenarioError naming ``flag``."""
+    path = pathlib.Path(path)
+    if path.is_dir():
+        raise ScenarioError(CL, flag, "a file path, not a folder", str(path))
+    p = path.absolute().parent
+    while not p.exists():
+        p = p.parent
+    if not p.is_dir():
+        raise ScenarioError(CL, flag, f"a path under a folder ({p} is a file)", str(path))
+    if not os.access(p, os.W_OK | os.X_OK):
+        raise ScenarioError(CL, flag, f"a path this user can write ({p} is not writable)", str(path))
+
+
+def write_atomic(path, data: str | bytes) -> None:
+    """Write a file whole or not at all: a temporary file beside it, then renamed over it."""
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    part = path.with_name(f".{path.name}.{os.getpid()}.part")
+    try:
+        if isinstance(data, bytes):
+            part.write_bytes(data)
+        else:
+            part.write_text(data)
+        os.replace(part, path)
+    finally:
+        with contextlib.suppress(OSError):
+            part.unlink()

@@ -17,7 +17,8 @@ import time
 import traceback
 
 from sumo_avoid.sensing import occlusion
-from sumo_avoid.studies.worker import _exit_now, child
+from sumo_avoid.studies.watch import own_stdio
+from sumo_avoid.studies.worker import child, exit_now
 
 
 def serve(parent: int) -> int:
@@ -96,18 +97,12 @@ def _forked_child(job: dict, inherited_fds: list[int]) -> None:
     try:
         for fd in inherited_fds:
             os.close(fd)
-        out = pathlib.Path(job["out"])
-        for fd, (path, flags) in enumerate([(os.devnull, os.O_RDONLY),
-                                            (out / "stdout.txt", os.O_WRONLY | os.O_CREAT | os.O_TRUNC),
-                                            (out / "stderr.txt", os.O_WRONLY | os.O_CREAT | os.O_TRUNC)]):
-            f = os.open(path, flags, 0o644)
-            os.dup2(f, fd)
-            os.close(f)
+        own_stdio(pathlib.Path(job["out"]))
         rc = child(job)  # SIGINT stays ignored: on Ctrl-C the batch kills the server and so its children
     except BaseException:
         traceback.print_exc()
     finally:
-        _exit_now(rc)
+        exit_now(rc)
 
 
 if __name__ == "__main__":

@@ -120,12 +120,13 @@ def figure(df: pd.DataFrame, root: pathlib.Path, scn: str, out_png: pathlib.Path
 
 
 def run(args) -> int:
+    seeds = batch.parse_seeds(args.seeds, key="--runs")
     tuned = tuned_overrides(args.tuned)
-    seeds = batch.parse_seeds(args.seeds)
     extra = ("output.plots=false",) + ((f"random_obstacles.count={args.obstacles}",) if args.obstacles else ())
     scenarios = tuple(args.scenarios) or DEFAULT
     runs = plan(scenarios, seeds, tuned, extra)
     led = args.out / "ledger.sqlite"
+    ledger_mod.check(led, "--out")  # a folder that holds (or can hold) the study's ledger
     every = tuple(s for v in runs.values() for s in v)
     cfg = batch.BatchConfig(every, led, workers=args.workers or os.cpu_count() or 1, scheduler=args.scheduler)
     c = batch.run_batch(cfg)

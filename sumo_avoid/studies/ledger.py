@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import hashlib
+import io
 import json
 import pathlib
 import re
@@ -20,6 +21,9 @@ import sqlite3
 from importlib import metadata
 
 import pandas as pd
+
+from sumo_avoid.core.config import ScenarioError
+from sumo_avoid.studies.files import CL, check_out_file, write_atomic
 
 FIXED = {  # column -> SQL type; metric columns are added after these
     "key": "TEXT PRIMARY KEY",
@@ -39,6 +43,26 @@ FIXED = {  # column -> SQL type; metric columns are added after these
     "code": "TEXT",  # code_version() of the plug-in that made the row
 }
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+
+
+def check(path, flag: str = "--ledger", new_ok: bool = True) -> None:
+    """``path`` is a ledger, or (``new_ok``) a file that can be created: not a folder, not a file of
+    another kind, not a SQLite database of something else. Raises ScenarioError naming ``flag``."""
+    path = pathlib.Path(path)
+    check_out_file(path, flag)
+    if not path.exists():
+        if not new_ok:
+            raise ScenarioError(CL, flag, "an existing ledger", str(path))
+        return
+    try:
+        with contextlib.closing(sqlite3.connect(f"file:{path}?mode=ro", uri=True)) as con:
+            tables = {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+            cols = {r[1] for r in con.execute("PRAGMA table_info(runs)")} if "runs" in tables else set()
+    except sqlite3.DatabaseError as e:
+        raise ScenarioError(CL, flag, f"a ledger (a SQLite file; this one: {e})", str(path)) from None
+    if (tables or not new_ok) and not {"key", "status"} <= cols:
+        raise ScenarioError(CL, flag, "a ledger (a SQLite file with a table 'runs' of sumo-avoid runs), not another "
+                            f"database (tables: {sorted(tables)})", str(path))
 
 
 def connect(path) -> sqlite3.Connection:
@@ -161,18 +185,21 @@ def row_hashes(path) -> dict[str, str]:
 
 
 def export(path, out) -> list[pathlib.Path]:
-    """Write the table as CSV (always) and Parquet (only if pyarrow is installed) next to ``out``.
+    """Write the table as CSV (always) and Parquet (only if pyarrow is installed) next to ``out``, each
+    file whole or not at all.
 
     ``out`` is a file name; its suffix is replaced by ``.csv`` / ``.parquet``. Returns the files written.
     """
     out = pathlib.Path(out)
     df = read(path)
     written = [out.with_suffix(".csv")]
-    df.to_csv(written[0], index=False)
+    write_atomic(written[0], df.to_csv(index=False))
     try:
         import pyarrow  # noqa: F401
     except ImportError:
         return written
     written.append(out.with_suffix(".parquet"))
-    df.to_parquet(written[-1], index=False)
+    buf = io.BytesIO()
+    df.to_parquet(buf, index=False)
+    write_atomic(written[-1], buf.getvalue())
     return written

@@ -18,11 +18,11 @@ import html
 import io
 import json
 import pathlib
-import sys
 import types
 
 import pandas as pd
 
+from sumo_avoid.core.config import ScenarioError
 from sumo_avoid.metrics.series import series
 from sumo_avoid.plots.trajectories import (
     _new_figure,
@@ -30,6 +30,7 @@ from sumo_avoid.plots.trajectories import (
     plot_trajectories,
 )
 from sumo_avoid.studies import ledger
+from sumo_avoid.studies.files import CL, check_out_file, write_atomic
 from sumo_avoid.sumo.road import Road
 
 METRICS = ("collisions", "min_gap_m", "phi_coll", "phi_wall", "mean_speed_mps", "time_to_goal_s",
@@ -38,25 +39,40 @@ METRICS = ("collisions", "min_gap_m", "phi_coll", "phi_wall", "mean_speed_mps", 
 
 
 def load_runs(src) -> tuple:
-    """(runs DataFrame, base folder for the ``artifacts`` column)."""
+    """(runs DataFrame, base folder for the ``artifacts`` column). Raises ScenarioError naming the
+    file for input that is no ledger and no run folder."""
     src = pathlib.Path(src)
     if src.is_dir() and (src / "ledger.sqlite").is_file():
         src = src / "ledger.sqlite"
     if src.is_file():
+        ledger.check(src, "LEDGER_OR_RUN_DIR", new_ok=False)
         return ledger.read(src), src.resolve().parent
     if not src.is_dir():
-        raise FileNotFoundError(f"{src}: neither a ledger file nor a folder")
+        raise ScenarioError(str(src), "<file>", "a ledger file or a folder of runs (no such file)", show_got=False)
     dirs = [src] if (src / "metrics.json").is_file() else sorted(p.parent for p in src.glob("*/metrics.json"))
     if not dirs:
-        raise FileNotFoundError(f"{src}: no ledger.sqlite and no run folders with metrics.json")
+        raise ScenarioError(str(src), "<file>", "a ledger.sqlite or run folders with metrics.json in this folder",
+                            show_got=False)
     rows = []
     for d in dirs:
-        m = json.loads((d / "metrics.json").read_text())
+        m = _metrics(d / "metrics.json")
         row = {"key": d.name, "status": "done", "error": None, "artifacts": str(d.resolve()), "net_file": None}
         row.update(ledger.scalar_metrics(m))
         row.update(scenario=m.get("scenario"), controller=m.get("controller"), seed=m.get("seed"))
         rows.append(row)
     return pd.DataFrame(rows), src.resolve()
+
+
+def _metrics(path: pathlib.Path) -> dict:
+    """A run's metrics.json as written by ``sumo-avoid run`` (a JSON object)."""
+    try:
+        m = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, ValueError) as e:
+        raise ScenarioError(str(path), "<file>", f"a metrics.json written by a run ({e})", show_got=False) from None
+    if not isinstance(m, dict):
+        raise ScenarioError(str(path), "<file>", "a metrics.json written by a run (a JSON object)",
+                            type(m).__name__, show_got=True)
+    return m
 
 
 GROUP = ["scenario", "controller"]
@@ -271,18 +287,15 @@ def add_parser(sub) -> None:
 
 
 def cmd_report(args) -> int:
-    try:
-        df, base = load_runs(args.source)
-    except FileNotFoundError as e:
-        print(f"sumo-avoid: error: {e}", file=sys.stderr)
-        return 2
+    for flag, path in (("--out", args.out), ("--md", args.md), ("--csv", args.csv)):
+        if path is not None:
+            check_out_file(path, flag)  # before the (slow) report is built
+    df, base = load_runs(args.source)
     try:
         page = build_html(df, base, args.title or f"sumo-avoid study: {args.source}", args.run)
     except ValueError as e:
-        print(f"sumo-avoid: error: {e}", file=sys.stderr)
-        return 2
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(page)
+        raise ScenarioError(CL, "--run", f"the key (or a key prefix) of a done run ({e})", args.run) from None
+    write_atomic(args.out, page)
     print(f"report -> {args.out} ({len(df)} runs)")
     if args.md:
         s = summary(df)
@@ -290,7 +303,7 @@ def cmd_report(args) -> int:
         text = f"## {' x '.join(varied(df)[1])}\n\n" + markdown(s, list(s.columns))
         if len(failed):
             text += "\n## Failed runs\n\n" + markdown(failed, ["key", "scenario", "controller", "seed", "error"])
-        args.md.write_text(text)
+        write_atomic(args.md, text)
     if args.csv:
-        df.to_csv(args.csv, index=False)
+        write_atomic(args.csv, df.to_csv(index=False))
     return 0

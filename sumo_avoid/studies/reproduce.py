@@ -20,12 +20,15 @@ import time
 import numpy as np
 import pandas as pd
 
+from sumo_avoid.core.config import ScenarioError
 from sumo_avoid.metrics import basic
 from sumo_avoid.metrics.flocking import FlockingOrder
 from sumo_avoid.plots.arena import plot_arena
 from sumo_avoid.rollout import runner
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.studies import formation_study
+from sumo_avoid.studies.batch import MAX_SEEDS
+from sumo_avoid.studies.files import make_dirs, remove_dirs
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]  # the checkout: sumo_avoid/studies/ -> ../..
 SPEEDS = (4, 6, 8)
@@ -58,6 +61,38 @@ def _job(job: dict) -> dict:
     keep = {k: m.get(k) for k in (*PAPER, *EXTRA) if k in m}
     keep.update(v=job["v"], seed=job["seed"], wall_s=m["wall_s"])
     return keep
+
+
+class RunFailed(RuntimeError):
+    """A run of the study failed (one line: which run, why)."""
+
+
+def _safe_job(job: dict) -> dict:
+    """:func:`_job` in a pool worker, its failure as a plain record: an exception crossing the process
+    boundary may not unpickle in the parent, which would then wait for ever."""
+    try:
+        return _job(job)
+    except Exception as e:
+        msg = str(e).strip().splitlines()[0] if str(e).strip() else ""
+        return {"v": job["v"], "seed": job["seed"], "error": f"{type(e).__name__}: {msg}"[:500]}
+
+
+def check_table4(args) -> None:
+    """Every flag, and the three scenarios with the flags' values and ``--set``, before anything runs."""
+    cl = "<command line>"
+    for key, v, lo in (("--seeds", args.seeds, 1), ("--agents", args.agents, 1), ("--first-seed", args.first_seed, 0)):
+        if v < lo:
+            raise ScenarioError(cl, key, f"an integer >= {lo}", v)
+    if args.first_seed + args.seeds - 1 > scenario.MAX_SEED or args.seeds > MAX_SEEDS:
+        raise ScenarioError(cl, "--seeds", f"at most {MAX_SEEDS} seeds in [0, {scenario.MAX_SEED}] from --first-seed",
+                            args.seeds)
+    if args.jobs is not None and args.jobs < 1:
+        raise ScenarioError(cl, "--jobs", "a positive integer", args.jobs)
+    if not 0 < args.duration <= scenario.MAX_DURATION_S:
+        raise ScenarioError(cl, "--duration", f"a duration in (0, {scenario.MAX_DURATION_S:g}] s", args.duration)
+    for v in SPEEDS:
+        scenario.load(ROOT / "scenarios" / f"arena_v{v}.toml", [f"arena.n_agents={args.agents}",
+                      f"sim.duration_s={args.duration}", *args.overrides], seed=args.first_seed)
 
 
 def summarise(runs: list[dict]) -> list[dict]:
@@ -118,8 +153,10 @@ def reproduce_table4(seeds: int = 20, agents: int = 100, duration: float = 600.0
     jobs = jobs or min(len(job_list), multiprocessing.cpu_count())
     ctx = multiprocessing.get_context("spawn")
     runs = []
-    with ctx.Pool(jobs, maxtasksperchild=1) as pool:
-        for r in pool.imap_unordered(_job, job_list):
+    with ctx.Pool(jobs, maxtasksperchild=1) as pool:  # leaving the block terminates the pool, also on error
+        for r in pool.imap_unordered(_safe_job, job_list):
+            if "error" in r:
+                raise RunFailed(f"reproduce table4: the run v_flock {r['v']} seed {r['seed']} failed: {r['error']}")
             runs.append(r)
             (out / "runs" / f"v{r['v']}_s{r['seed']}.json").write_text(json.dumps(r, indent=1, sort_keys=True))
             print(f"  v_flock {r['v']} seed {r['seed']}: mu {r['mu']:.3f} v_vel {r['v_vel']:.2f} "
@@ -163,8 +200,15 @@ def _cmd(args) -> int:
     if args.what == "formation":
         args.seeds, args.out = args.seed_list, args.out or ROOT / "reports" / "formation"
         return formation_study.run(args)
-    rows = reproduce_table4(args.seeds, args.agents, args.duration, args.out, args.jobs, args.overrides,
-                            args.first_seed)
+    check_table4(args)
+    made = make_dirs(args.out or ROOT / "reports" / "table4", "--out")
+    try:
+        rows = reproduce_table4(args.seeds, args.agents, args.duration, args.out, args.jobs, args.overrides,
+                                args.first_seed)
+    except RunFailed as e:
+        remove_dirs(made)
+        print(f"sumo-avoid: error: {e}", file=sys.stderr)
+        return 1
     for r in rows:
         if r["metric"] in ("mu", "v_vel"):
             print(f"v_flock {r['v_flock']} {r['metric']}: ours {r['ours_mean']:.3f} paper {r['paper_mean']:.3f}")

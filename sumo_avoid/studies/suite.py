@@ -27,7 +27,7 @@ from sumo_avoid.core.config import ScenarioError, build
 from sumo_avoid.scenario.spec import read_toml
 from sumo_avoid.studies import batch, ledger
 from sumo_avoid.studies.batch import parse_seeds
-from sumo_avoid.studies.files import SuiteFile
+from sumo_avoid.studies.files import SuiteFile, check_out_file, write_atomic
 
 OPS = {"==": operator.eq, "!=": operator.ne, "<=": operator.le, ">=": operator.ge, "<": operator.lt, ">": operator.gt}
 AGGREGATES = ("rate", "mean", "min", "max")
@@ -112,10 +112,14 @@ def load(path, seeds_override=None, extra_sets=()) -> list[Entry]:
                                                                          else sf.defaults.seeds)
         if raw_seeds is None:
             raise ScenarioError(file, f"{where}.seeds", "seeds like \"1-5\" (here or in [defaults])", show_got=False)
-        seeds = parse_seeds(raw_seeds, file, f"{where}.seeds")
+        seeds = (parse_seeds(raw_seeds, file, f"{where}.seeds") if seeds_override is None
+                 else parse_seeds(seeds_override))
         sets = sf.defaults.set + e.set + tuple(extra_sets)
         parsed = tuple(Criterion.parse(c, file, f"{where}.criteria[{j}]") for j, c in enumerate(e.criteria))
-        out.append(Entry(e.name, path.resolve().parent / e.scenario, e.controller, seeds, sets, parsed))
+        scn = path.resolve().parent / e.scenario
+        if not scn.is_file():
+            raise ScenarioError(file, f"{where}.scenario", "an existing scenario file", e.scenario)
+        out.append(Entry(e.name, scn, e.controller, seeds, sets, parsed))
     return out
 
 
@@ -199,6 +203,12 @@ def cmd_suite(args) -> int:
     entries = load(args.suite, args.seeds, args.overrides)
     if args.workers is not None and args.workers < 1:
         raise ScenarioError("<command line>", "--workers", "a positive integer", args.workers)
+    if not 0 < args.timeout < math.inf:
+        raise ScenarioError("<command line>", "--timeout", "a positive number of seconds", args.timeout)
+    if args.junit:
+        check_out_file(args.junit, "--junit")
+    if args.ledger:
+        ledger.check(args.ledger, "--ledger")
     runs_by_entry, all_runs, seen = {}, [], set()
     for e in entries:
         runs_by_entry[e.name] = batch.expand([e.scenario], e.seeds, e.overrides, [e.controller])
@@ -215,7 +225,6 @@ def cmd_suite(args) -> int:
         results = evaluate(entries, runs_by_entry, ledger.read(led))
     print(table(results))
     if args.junit:
-        args.junit.parent.mkdir(parents=True, exist_ok=True)
-        args.junit.write_text(junit_xml(results, args.suite.stem))
+        write_atomic(args.junit, junit_xml(results, args.suite.stem))
         print(f"JUnit XML -> {args.junit}")
     return 0 if all(r.passed for r in results) else 1

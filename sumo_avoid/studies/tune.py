@@ -30,6 +30,7 @@ from sumo_avoid.core.config import ScenarioError
 from sumo_avoid.studies import batch
 from sumo_avoid.studies import ledger as ledger_mod
 from sumo_avoid.studies.cuckoo import CuckooSearch
+from sumo_avoid.studies.files import check_out_file
 
 FAILED_SCORE = 100.0
 TUNABLE = ("formation",)
@@ -180,6 +181,8 @@ def cmd_tune(args) -> int:
     for s in seeds:  # bad scenario or --set: one line, exit 2, nothing written
         batch.plan(args.scenario, s, sets + overrides((args.eta_at[0], args.eta_re[0])), "formation")
     led = args.ledger or args.out / "ledger.sqlite"
+    check_out_file(args.out / "tuned.toml", "--out")  # refused now, not after the search
+    ledger_mod.check(led, "--ledger")
     cfg = {"ledger": led, "workers": args.workers or os.cpu_count() or 1, "scheduler": args.scheduler}
     show = not args.quiet and sys.stderr.isatty()
     ev = Evaluator(args.scenario, seeds, sets, cfg, args.penalty, progress=False)

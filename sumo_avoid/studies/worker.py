@@ -22,13 +22,15 @@ own fork server).
 
 Test-only fault injection: ``inject_crash = "segfault"`` makes the child dereference a NULL
 pointer (a real SIGSEGV in native code), ``"abort"`` makes it call ``os.abort()``; both happen
-after the scenario is loaded, before SUMO starts. (A real input that segfaults SUMO 1.28:
+after the scenario is loaded, before SUMO starts; ``"segfault_mid_run"`` segfaults once the simulation has run
+``CRASH_AT_S`` (SUMO running). (A real input that segfaults SUMO 1.28:
 ``tests/data/segfault_net.toml``, see docs/batch.md.)
 """
 from __future__ import annotations
 
 import atexit
 import datetime
+import faulthandler
 import functools
 import json
 import os
@@ -44,12 +46,22 @@ import uuid
 _IMPORT_START = (os.getpid(), time.time())  # a spawned run's interpreter imports what follows itself
 
 from sumo_avoid import outputs as evaluate  # noqa: E402
+from sumo_avoid.core.config import ScenarioError  # noqa: E402
 from sumo_avoid.rollout import runner  # noqa: E402
 from sumo_avoid.scenario import spec as scenario  # noqa: E402
+from sumo_avoid.studies.watch import (  # noqa: E402
+    CRASH_AT_S,
+    CrashAt,
+    ProgressFile,
+    cpu_s,
+    crash,
+    crash_site,
+    die_with_parent,
+)
 
 _IMPORTED = time.time()
 
-CRASHES = ("segfault", "abort")
+CRASHES = ("segfault", "abort", "segfault_mid_run")
 STARTS = ("fork", "spawn")
 # One run per core: BLAS thread pools would only oversubscribe the cores, and the fork server
 # must stay single-threaded to fork safely.
@@ -81,7 +93,7 @@ def kill_all() -> None:
             _SERVER.kill()  # its children get SIGKILL too (PR_SET_PDEATHSIG)
 
 
-def _now() -> str:
+def now() -> str:
     return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="milliseconds")
 
 
@@ -113,21 +125,10 @@ def run_one(spec: dict, root: str, timeout_s: float, start: str | None = None) -
     ``start``: ``"fork"`` (from the warm fork server) or ``"spawn"`` (fresh interpreter);
     default :func:`default_start`.
     """
-    start = start or default_start()
-    if start not in STARTS:
-        raise ValueError(f"start must be one of {STARTS}, not {start!r}")
     root_p = pathlib.Path(root).absolute()  # the fork server's working directory may not be ours
     tmp = root_p / ".tmp" / f"{spec['key'][:16]}-{uuid.uuid4().hex[:8]}"
     tmp.mkdir(parents=True, exist_ok=True)
-    started, t0 = _now(), time.perf_counter()
-    job = dict(spec, out=str(tmp), timeout_s=timeout_s, id=tmp.name)
-    if start == "fork":
-        status = _run_forked(job, timeout_s)
-    else:
-        status = _run_spawned(job, tmp, timeout_s)
-    res = _result(tmp, status, timeout_s)
-    res.update(started_at=started, ended_at=_now(), wall_s=time.perf_counter() - t0, start=start)
-    res["marks"]["ended_wall"] = time.time()
+    res = run_in(tmp, spec, timeout_s, start)
     (tmp / "result.json").write_text(json.dumps(res, sort_keys=True))  # now with the parent's side and timings
     final = root_p / spec["key"][:16]
     if final.exists():  # left over from an unfinished earlier attempt (done runs are never re-run)
@@ -137,7 +138,26 @@ def run_one(spec: dict, root: str, timeout_s: float, start: str | None = None) -
     return res
 
 
-def _result(tmp: pathlib.Path, status: dict, timeout_s: float) -> dict:
+def run_in(tmp: pathlib.Path, spec: dict, timeout_s: float, start: str | None = None) -> dict:
+    """Run one spec in its own process with ``tmp`` (an existing folder) as its output folder;
+    return its result dict (never raises for a failing run). (``sumo-avoid run`` forks its one run
+    from its own process instead: :mod:`sumo_avoid.studies.isolate`.)"""
+    start = start or default_start()
+    if start not in STARTS:
+        raise ValueError(f"start must be one of {STARTS}, not {start!r}")
+    started, t0 = now(), time.perf_counter()
+    job = dict(spec, out=str(pathlib.Path(tmp).absolute()), timeout_s=timeout_s, id=pathlib.Path(tmp).name)
+    if start == "fork":
+        status = _run_forked(job, timeout_s)
+    else:
+        status = _run_spawned(job, pathlib.Path(tmp), timeout_s)
+    res = result_of(pathlib.Path(tmp), status, timeout_s)
+    res.update(started_at=started, ended_at=now(), wall_s=time.perf_counter() - t0, start=start)
+    res["marks"]["ended_wall"] = time.time()
+    return res
+
+
+def result_of(tmp: pathlib.Path, status: dict, timeout_s: float) -> dict:
     """The run's result: its result.json, or the failure its exit status tells."""
     res_file = tmp / "result.json"
     rc, timed_out = status.get("rc"), status.get("timed_out", False)
@@ -149,6 +169,9 @@ def _result(tmp: pathlib.Path, status: dict, timeout_s: float) -> dict:
         res = {"status": "failed", "error": status["error"]}
     elif rc < 0:
         res = {"status": "failed", "error": f"worker died: {_signal_name(-rc)}"}
+        where = crash_site(tmp / "stderr.txt")
+        if where:
+            res["where"] = where
     else:
         tail = _last_line(tmp / "stderr.txt")
         res = {"status": "failed", "error": f"worker exited with code {rc} and no result" + (f": {tail}" if tail else "")}
@@ -306,7 +329,7 @@ def _run_forked(job: dict, timeout_s: float) -> dict:
     return reply
 
 
-def _exit_now(rc: int) -> None:
+def exit_now(rc: int) -> None:
     """Flush stdio and exit without the interpreter's teardown: nothing in it is needed once
     result.json is written, and in a spawned worker it took 0.40 s (median, benchmarks/batch.py on
     a loaded 2-core machine) of freeing pandas, numpy, libsumo...; 0.05 s from result to reaped
@@ -320,39 +343,11 @@ def _exit_now(rc: int) -> None:
 
 
 # --- the run (in the child) ---------------------------------------------------------------------
-def _die_with_parent() -> None:
-    """Linux: get SIGKILL when the parent dies, so a killed batch leaves no orphan runs."""
-    try:
-        import ctypes
-
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):  # pragma: no cover - not Linux
-        pass
-
-
-def _crash(kind: str) -> None:
-    if kind == "segfault":
-        import ctypes
-
-        ctypes.string_at(0)  # NULL dereference: SIGSEGV
-    elif kind == "abort":
-        os.abort()
-
-
-def _cpu_s() -> float | None:
-    """CPU time of this process so far (a forked child's count starts at 0)."""
-    try:
-        import resource
-    except ImportError:  # pragma: no cover - Windows
-        return None
-    usage = resource.getrusage(resource.RUSAGE_SELF)
-    return usage.ru_utime + usage.ru_stime
-
-
 def child(job: dict) -> int:
     own_imports = _IMPORT_START[0] == os.getpid()  # spawned: this process imported the run's modules
     marks = {"entry_wall": _IMPORT_START[1] if own_imports else time.time()}
-    _die_with_parent()
+    faulthandler.enable(file=2)  # a fatal signal writes the Python stack to stderr.txt: where the run died
+    die_with_parent()
     if os.getppid() != job["parent"]:  # the parent died before prctl took effect
         return 3
     out = pathlib.Path(job["out"])
@@ -367,21 +362,30 @@ def child(job: dict) -> int:
         marks["imported_wall"] = _IMPORTED if own_imports else time.time()
         scn = scenario.load(job["scenario"], job["overrides"], controller=job["controller"], seed=job["seed"])
         marks["loaded_wall"] = time.time()
-        if job.get("inject_crash"):
-            _crash(job["inject_crash"])
+        kind = job.get("inject_crash")
+        if kind in ("segfault", "abort"):
+            crash(kind)
         t_run = time.time()
-        res = runner.run(scn, log_file=out / "sumo.log", progress=False)
+        watch = [ProgressFile(job["progress_file"])] if job.get("progress_file") else []
+        if kind == "segfault_mid_run":
+            watch.append(CrashAt(CRASH_AT_S))
+        res = runner.run(scn, log_file=out / "sumo.log", progress=False, callbacks=watch)
         marks["sumo_start_wall"] = t_run + res.timings.get("setup_s", 0.0)  # road and controllers set up
         marks["run_end_wall"] = time.time()
-        m = evaluate.write_outputs(res, out, plots=scn.spec.output.plots)
+        m = evaluate.write_outputs(res, out, plots=scn.spec.output.plots and job.get("plots", True))
         marks["written_wall"] = time.time()
-        finish({"status": "done", "metrics": m, "timings": res.timings, "cpu_s": _cpu_s()})
+        finish({"status": "done", "metrics": m, "timings": res.timings, "cpu_s": cpu_s()})
         return 0
+    except ScenarioError as e:  # bad input found only once SUMO ran: the caller reports it as such
+        finish({"status": "failed", "error": f"ScenarioError: {e}"[:500], "bad_input": str(e)})
+        return 1
     except Exception as e:  # recorded as the run's failure, one line
         msg = str(e).strip().splitlines()[0] if str(e).strip() else ""
         finish({"status": "failed", "error": f"{type(e).__name__}: {msg}"[:500]})
         return 1
 
 
+
+
 if __name__ == "__main__":
-    _exit_now(child(json.loads(sys.argv[1])))
+    exit_now(child(json.loads(sys.argv[1])))

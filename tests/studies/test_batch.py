@@ -18,6 +18,7 @@ import pytest
 from conftest import cli_in_process
 
 from sumo_avoid.cli import main
+from sumo_avoid.core.config import ScenarioError
 from sumo_avoid.studies import batch, ledger, worker
 from sumo_avoid.studies.worker import run_one
 
@@ -229,11 +230,12 @@ def test_sumo_error_and_timeout_are_recorded_as_failed(tmp_path, start):
     scn = tmp_path / "s.toml"
     scn.write_text(OVERTAKING.read_text().replace("../nets/", f"{ROOT}/nets/")
                    .replace('"overtaking.rou.xml"', '"bad.rou.xml"'))
+    # a vType SUMO refuses when it loads it (an unknown edge is now found before the run: sumo/inputs.py)
     (tmp_path / "bad.rou.xml").write_text((ROOT / "scenarios" / "overtaking.rou.xml").read_text()
-                                          .replace('edges="road"', 'edges="no_such_edge"'))
+                                          .replace('accel="2.6"', 'accel="-3"'))
     spec = batch.plan(scn, 1, SHORT)
     res = run_one(spec.to_json(), str(tmp_path / "runs"), 120, start)
-    assert res["status"] == "failed" and "no_such_edge" in res["error"]  # SUMO's own message
+    assert res["status"] == "failed" and "Invalid parsing embedded VType" in res["error"]  # SUMO's own message
     # the whole 90 s scenario: well over 0.3 s of wall time even without interpreter start
     res = run_one(batch.plan(OVERTAKING, 1, ["output.plots=false"]).to_json(), str(tmp_path / "runs"), 0.3, start)
     assert res == {**res, "status": "failed", "error": "timeout: run exceeded 0.3 s and was killed", "start": start}
@@ -327,18 +329,16 @@ def test_progress_is_quiet_in_ci_or_without_a_terminal(monkeypatch):
     bar.close()
 
 
-def test_an_ego_that_never_departs_is_a_failed_run_with_its_cause(tmp_path):
-    """The same error as `sumo-avoid run` (exit 2 there): recorded failed with the one line, and the
-    batch goes on with the good run."""
+def test_an_ego_that_never_departs_is_named_before_the_batch_runs(tmp_path):
+    """The same error as `sumo-avoid run`: an ego whose depart time is after the run's end is bad
+    input, found from the route file when the batch is planned (nothing runs); the other grid point plans."""
     (tmp_path / "r.rou.xml").write_text('<routes>\n  <trip id="ego" from="road" to="road" depart="0"/>\n'
                                         '  <trip id="late" from="road" to="road" depart="60"/>\n</routes>\n')
     scn = tmp_path / "late.toml"
     scn.write_text(f'name = "late"\n[sim]\nnet = "{ROOT / "nets" / "overtaking.net.xml"}"\nroutes = ["r.rou.xml"]\n'
                    'duration_s = 3.0\n[ego]\nids = ["ego", "late"]\n[output]\nplots = false\n')
-    specs = batch.expand([scn], [1], grid={"ego.ids": [["ego", "late"], ["ego"]]})
-    cfg = batch.BatchConfig(tuple(specs), tmp_path / "ledger.sqlite", workers=1)
-    assert batch.run_batch(cfg, progress=False) == {"total": 2, "skipped": 0, "done": 1, "failed": 1}
-    df = ledger.read(tmp_path / "ledger.sqlite")
-    error, = df.loc[df["status"] == "failed", "error"]
-    assert error == (f"ScenarioError: {scn}: key 'ego.ids[1]': expected egos that depart within the run: 'late' "
-                     "never departed by t=3.0 s (its depart time is later, or SUMO dropped it)")
+    with pytest.raises(ScenarioError) as err:
+        batch.expand([scn], [1], grid={"ego.ids": [["ego", "late"], ["ego"]]})
+    assert str(err.value) == (f"{scn}: key 'ego.ids[1]': expected egos that depart within the run: 'late' departs "
+                              "at t=60 s, the run ends at sim.duration_s = 3 s")
+    assert len(batch.expand([scn], [1], grid={"ego.ids": [["ego"]]})) == 1
