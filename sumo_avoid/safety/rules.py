@@ -6,7 +6,7 @@ Per ego and step, with s the arc length of the ego's front bumper projected on i
 
 * **Signals.** For every signalised link ahead within ``lookahead_m`` (its state from the
   snapshot's ``signals``, index ``link_index``): 'r' / 'u' (red, red-yellow) -> stop; 'y' -> stop
-  when the stop is comfortable, v^2 / (2 b_comf) <= distance - margin, decided once at the onset
+  when the stop is comfortable, v^2 / (2 b_comf) <= distance to the line, decided once at the onset
   of the yellow (no flip-flop while braking) and else go on; 'G' / 'g' / 'o' / 'O' -> go, 'g' and
   'o' subject to right of way. A stop caps the speed at the braking curve
   sqrt(2 b_comf (d - margin)), d the distance of the front bumper to the stop line, so the ego
@@ -149,7 +149,10 @@ class TrafficRulesLayer:
             if c != "y":
                 e.yellow.pop(k, None)
             if c == "y" and k not in e.yellow:
-                e.yellow[k] = STOP if v * v / (2.0 * p.comfort_decel_mps2) <= d else GO
+                # the law's test, the metric's: a comfortable stop before the line itself (d is to
+                # the stop position, stop_margin_m before it; deciding on d went on through yellows
+                # the metric judged stoppable by up to 1 m: grid_actuated seeds 3 and 9)
+                e.yellow[k] = STOP if v * v / (2.0 * p.comfort_decel_mps2) <= d + p.stop_margin_m else GO
             if c in RED or e.yellow.get(k) == STOP:
                 here = math.sqrt(2.0 * p.comfort_decel_mps2 * max(d, 0.0))
                 if here < cap:
