@@ -111,31 +111,27 @@ def safety_caps(v, own, walls, boxes, p: FlockingParams) -> np.ndarray:
     own (4,2) the ego's footprint in (s, d); walls (3,) distances to the right and left bound and
     the route's end; boxes: [(footprints (B,k,2), velocities (B,2))] of everything else.
     """
-    v = np.array(v, float)
-    a, g, r0 = p.a_shill_mps2, p.p_shill_ps, p.r0_shill_m
+    a, g, r0, m = p.a_shill_mps2, p.p_shill_ps, p.r0_shill_m, p.wall_margin_m
     rear, front, lo, hi = own[:, 0].min(), own[:, 0].max(), own[:, 1].min(), own[:, 1].max()
-    cap_s, cap_lo, cap_hi = D(walls[2] - r0, a, g), -np.inf, np.inf
-    for polys, vel in boxes:
-        if not len(polys):
-            continue
-        o_rear, o_front = polys[..., 0].min(axis=1), polys[..., 0].max(axis=1)
-        o_lo, o_hi = polys[..., 1].min(axis=1), polys[..., 1].max(axis=1)
-        gap = o_rear - front
-        ahead = (o_hi > lo) & (o_lo < hi) & (o_rear > 0.5 * (rear + front))
-        if ahead.any():
-            cap_s = min(cap_s, float(np.min(np.maximum(vel[ahead, 0], 0.0) + D(gap[ahead] - p.road_gap_m, a, g))))
-        beside = (o_front > rear) & (o_rear < front)
-        left, right = beside & (o_lo >= 0.5 * (lo + hi)), beside & (o_hi <= 0.5 * (lo + hi))
-        if left.any():
-            cap_hi = min(cap_hi, float(np.min(vel[left, 1] + D(o_lo[left] - hi - r0, a, g))))
-        if right.any():
-            cap_lo = max(cap_lo, float(np.max(vel[right, 1] - D(lo - o_hi[right] - r0, a, g))))
-    v[0] = min(v[0], cap_s)
+    boxes = [(b, u) for b, u in boxes if len(b)]
+    ext = np.concatenate([np.stack([b[..., 0].min(1), b[..., 0].max(1), b[..., 1].min(1), b[..., 1].max(1)], 1)
+                          for b, _ in boxes]) if boxes else np.zeros((0, 4))
+    vel = np.concatenate([u for _, u in boxes]) if boxes else np.zeros((0, 2))
+    o_rear, o_front, o_lo, o_hi = ext.T
+    ahead = (o_hi > lo) & (o_lo < hi) & (o_rear > 0.5 * (rear + front))
+    beside = (o_front > rear) & (o_rear < front)
+    left, right = beside & (o_lo >= 0.5 * (lo + hi)), beside & (o_hi <= 0.5 * (lo + hi))
+    r = np.concatenate([[walls[0] - m, walls[1] - m, walls[2] - r0], o_rear[ahead] - front - p.road_gap_m,
+                        o_lo[left] - hi - r0, lo - o_hi[right] - r0])
+    speed = D(r, a, g)  # one call: the braking curve at every distance
+    n1, n2 = 3 + int(ahead.sum()), 3 + int(ahead.sum()) + int(left.sum())
+    cap_s = min(speed[2], float(np.min(np.maximum(vel[ahead, 0], 0.0) + speed[3:n1], initial=np.inf)))
+    cap_hi = float(np.min(vel[left, 1] + speed[n1:n2], initial=np.inf))
+    cap_lo = float(np.max(vel[right, 1] - speed[n2:], initial=-np.inf))
+    vs, vd = min(float(v[0]), cap_s), float(v[1])
     if cap_lo <= cap_hi:
-        v[1] = np.clip(v[1], cap_lo, cap_hi)
-    m = p.wall_margin_m
-    v[1] = np.clip(v[1], -D(walls[0] - m, a, g), D(walls[1] - m, a, g))
-    return v
+        vd = min(max(vd, cap_lo), cap_hi)
+    return np.array([vs, min(max(vd, -speed[0]), speed[1])])
 
 
 def course_limits(v, p: FlockingParams) -> np.ndarray:
