@@ -30,10 +30,16 @@ from sumo_avoid.control.flock_terms import (
     FlockingParams,
     combine,
     friction,
+    neighbour_pairs,
     repulsion,
     shill,
 )
-from sumo_avoid.control.road_view import MAX_ABS_D_M, OUTSIDE_MARGIN_M, RoadView
+from sumo_avoid.control.road_view import (
+    MAX_ABS_D_M,
+    OUTSIDE_MARGIN_M,
+    TRACK_WINDOW_M,
+    RoadView,
+)
 from sumo_avoid.core.curves import braking_curve_D as D
 from sumo_avoid.core.geometry import convex_distance, footprint_corners, wrap_angle
 from sumo_avoid.core.types import EgoTask, LanePiece
@@ -142,134 +148,158 @@ def course_limits(v, p: FlockingParams) -> np.ndarray:
 
 
 class RoadFlock:
-    """The route frames and carriageways of a flock's members; maps their senses into each frame."""
+    """The flock's route frames: the members that drive the same route share one frame (the
+    first such member's reference path; the carriageway spans every lane across it), so each
+    update maps the group's states into it once and sums the terms for all members at once."""
 
     def __init__(self, step_s: float):
         self.step_s = float(step_s)
-        self.views: dict[str, RoadView] = {}
-        self.ways: dict[str, Carriageway | None] = {}
+        self.key: dict[str, tuple] = {}  # ego id -> its route (the normal edges of its path)
+        self.views: dict[tuple, RoadView] = {}  # route -> frame
+        self.ways: dict[tuple, Carriageway | None] = {}
+        self._s: dict[str, float] = {}  # ego id -> its s at the last update (projection hint)
 
     def add(self, task: EgoTask) -> None:
-        self.views[task.vid] = RoadView(task)
-        self.ways[task.vid] = Carriageway(task.lanes) if task.lanes else None
+        key = tuple(p.edge for p in task.lanes if not p.edge.startswith(":")) or (task.vid,)
+        self.key[task.vid] = key
+        if key not in self.views:
+            self.views[key] = RoadView(task)
+            self.ways[key] = Carriageway(task.lanes) if task.lanes else None
 
     def remove(self, vid: str) -> None:
-        self.views.pop(vid, None)
-        self.ways.pop(vid, None)
+        self.key.pop(vid, None)
+        self._s.pop(vid, None)
 
-    def corridor(self, vid: str, s) -> tuple[np.ndarray, np.ndarray]:
-        way = self.ways[vid]
+    def corridor(self, key, s) -> tuple[np.ndarray, np.ndarray]:
+        s = np.asarray(s, float)
+        way = self.ways[key]
         if way is None:
-            s = np.atleast_1d(np.asarray(s, float))
-            return np.full(len(s), -np.inf), np.full(len(s), np.inf)
-        return way.corridor(s)
+            return np.full(s.shape, -np.inf), np.full(s.shape, np.inf)
+        lo, hi = way.corridor(s.ravel())
+        return lo.reshape(s.shape), hi.reshape(s.shape)
 
-    def frame_state(self, vid: str, pos, vel, heading: float):
-        """Own (s, d), velocity (s_dot, d_dot) and heading relative to the path."""
-        view = self.views[vid]
-        s, d = view.locate(pos)
-        vs, vd = view.frame.velocity_to_frenet(s, d, np.asarray(vel, float)[None, :])
-        psi = float(wrap_angle(heading - view.frame.heading_at(s)[0]))
-        return s, d, np.array([vs[0], vd[0]]), psi
+    def _locate(self, frame, ids, pos) -> tuple[np.ndarray, np.ndarray]:
+        """(s, d) of the members' centres, each projected near its s of the last update."""
+        hint = np.array([self._s.get(v, np.nan) for v in ids])
+        s, d = np.empty(len(ids)), np.empty(len(ids))
+        known = np.isfinite(hint)
+        if known.any():
+            s[known], d[known] = frame.to_frenet(pos[known], hint[known], TRACK_WINDOW_M)
+        if (~known).any():
+            s[~known], d[~known] = frame.to_frenet(pos[~known])
+        self._s.update(zip(ids, s.tolist()))
+        return s, d
 
-    def to_frame(self, vid: str, s: float, pos, vel, window_m: float):
-        """Points (N,2) and their velocities (N,2) in ``vid``'s frame (projected near s)."""
-        frame = self.views[vid].frame
-        if not len(pos):
-            return np.zeros((0, 2)), np.zeros((0, 2))
-        ps, pd = frame.to_frenet(pos, np.full(len(pos), s), window_m)
-        vs, vd = frame.velocity_to_frenet(ps, pd, vel)
-        return np.column_stack([ps, pd]), np.column_stack([vs, vd])
-
-    def obstacles(self, vid: str, s: float, corners, vel, window_m: float):
-        """Footprints (B,4,2) in the plane -> (corners (B',4,2), velocities (B',2)) in the frame,
-        without those wholly outside the carriageway or too far across or along it."""
-        if not len(corners):
-            return np.zeros((0, 4, 2)), np.zeros((0, 2))
-        frame = self.views[vid].frame
-        c = np.asarray(corners, float)
-        k = c.shape[1]
-        cs, cd = frame.to_frenet(c.reshape(-1, 2), np.full(c.shape[0] * k, s), window_m)
-        fc = np.stack([cs, cd], -1).reshape(-1, k, 2)
-        lo, hi = self.corridor(vid, cs)
-        lo, hi = lo.reshape(-1, k), hi.reshape(-1, k)
-        inside = ((fc[..., 1] > lo - OUTSIDE_MARGIN_M).any(1) & (fc[..., 1] < hi + OUTSIDE_MARGIN_M).any(1)
-                  & (np.abs(fc[..., 1]).min(1) < MAX_ABS_D_M) & (np.abs(fc[..., 0] - s).min(1) < window_m)
-                  & np.isfinite(fc).all((1, 2)))
-        fc = fc[inside]
-        centre = fc.mean(axis=1)
-        vs, vd = frame.velocity_to_frenet(centre[:, 0], centre[:, 1], np.asarray(vel, float)[inside])
-        return fc, np.column_stack([vs, vd])
-
-    def wall_distances(self, vid: str, s: float, d: float, psi: float, length: float, width: float):
-        """Distances (3,) of the footprint to the right and left bound and to the end of the route
-        (0 past it) and their inward normals (3, 2) in (s, d). The route's end is a wall across the
-        road: the flock stops there, a car driven past the end of its route leaves the network."""
-        c = footprint_corners(np.array([[s, d]]), np.array([psi]), np.array([length]), np.array([width]))[0]
-        lo, hi = self.corridor(vid, c[:, 0])
-        end = self.views[vid].length_m
-        dist = np.array([(c[:, 1] - lo).min(), (hi - c[:, 1]).min(), end - c[:, 0].max()])
-        return np.maximum(dist, 0.0), np.array([[0.0, 1.0], [0.0, -1.0], [-1.0, 0.0]])
-
-    @staticmethod
-    def obstacle_distances(s: float, d: float, psi: float, length: float, width: float, polys):
-        """Footprint-to-footprint distances (B,) to obstacle polygons (B,k,2) in the frame and unit
-        directions (B,2) from each obstacle's nearest point towards the ego (0 in contact; then
-        from the obstacle's centre)."""
-        own = footprint_corners(np.array([[s, d]]), np.array([psi]), np.array([length]), np.array([width]))
-        dist, p_ego, p_obs = convex_distance(np.repeat(own, len(polys), axis=0), polys)
-        away = p_ego - p_obs
-        n = np.hypot(away[:, 0], away[:, 1])
-        centre = np.array([s, d]) - polys.mean(axis=1)
-        away = np.where((n > 1e-6)[:, None], away, centre)
-        return dist, away / np.maximum(np.hypot(away[:, 0], away[:, 1]), 1e-12)[:, None]
-
-    def to_xy(self, vid: str, s: float, d: float, v_frenet) -> np.ndarray:
-        return self.views[vid].to_xy_velocity(s, d, v_frenet, self.step_s)
-
-    def curve_speed(self, vid: str, s: float, a_lat_mps2: float, decel_mps2: float) -> float:
-        return self.views[vid].curve_speed(s, a_lat_mps2, decel_mps2)
+    def _obstacles(self, key, s_near, corners, window_m: float):
+        """Footprints (B,K,2) in the plane -> in the frame (B,K,2), projected near ``s_near`` (B,),
+        and which are kept: not wholly outside the carriageway, nor too far across or along it."""
+        frame = self.views[key].frame
+        b, k = corners.shape[:2]
+        cs, cd = frame.to_frenet(corners.reshape(-1, 2), np.repeat(s_near, k), window_m)
+        fc = np.stack([cs, cd], -1).reshape(b, k, 2)
+        lo, hi = self.corridor(key, fc[..., 0])
+        keep = ((fc[..., 1] > lo - OUTSIDE_MARGIN_M).any(1) & (fc[..., 1] < hi + OUTSIDE_MARGIN_M).any(1)
+                & (np.abs(fc[..., 1]).min(1) < MAX_ABS_D_M) & (np.abs(fc[..., 0] - s_near[:, None]).min(1) < window_m)
+                & np.isfinite(fc).all((1, 2)))
+        return fc, keep
 
     def desired(self, p: FlockingParams, ego_ids, own_pos, own_vel, heading, length, width, nb_pos, nb_vel,
                 groups) -> np.ndarray:
-        """Desired velocities (E,2) in the plane, each computed in its ego's route frame.
+        """Desired velocities (E,2) in the plane, computed in the members' route frames.
 
         own_* (E,..): the egos' sensed states; nb_pos, nb_vel (E,2): the flock mates' states as
         received (row k: ego k); groups: obstacles as (corners (B,K,2), velocities (B,2), owner (B,)
         or None) in the plane, ``owner`` = the ego that perceives each (radar), None = all do.
         """
-        e = len(ego_ids)
-        out = np.zeros((e, 2))
+        out = np.zeros((len(ego_ids), 2))
+        routes: dict[tuple, list[int]] = {}
         for k, vid in enumerate(ego_ids):
-            s, d, v_own, psi = self.frame_state(vid, own_pos[k], own_vel[k], heading[k])
-            q, vk = np.array([[s, d]]), v_own[None, :]
-            v = np.array([[p.v_flock_mps, 0.0]])  # migration along the route
-            mates = np.flatnonzero(np.arange(e) != k)
-            nb_fr, nb_v = self.to_frame(vid, s, nb_pos[mates], nb_vel[mates], p.r_c_m)
-            r = np.hypot(nb_fr[:, 0] - s, nb_fr[:, 1] - d)
-            j = np.flatnonzero(r <= p.r_c_m)
-            i = np.zeros(len(j), dtype=np.int64)
-            v = v + repulsion(q, nb_fr, i, j, r[j], p, 1) + friction(vk, nb_v, i, j, r[j], p, 1)
-            dist_w, inward = self.wall_distances(vid, s, d, psi, length[k], width[k])
-            v = v + shill(vk, dist_w[None], inward[None], p)
-            ahead_boxes = []
-            for corners, vel, owner in groups:
-                mine = np.ones(len(corners), bool) if owner is None else owner == k
-                gap = np.hypot(corners[..., 0] - own_pos[k, 0], corners[..., 1] - own_pos[k, 1]).min(axis=1)
-                mine &= gap <= p.r_c_m
-                polys, o_vel = self.obstacles(vid, s, corners[mine], vel[mine], p.r_c_m)
-                if len(polys):
-                    dist, away = self.obstacle_distances(s, d, psi, length[k], width[k], polys)
-                    v = v + shill(vk, dist[None], away[None], p, o_vel[None])
-                    ahead_boxes.append((polys, o_vel))
-            v = combine(v, p)[0]
-            v_road = self.curve_speed(vid, s, p.curve_lat_accel_mps2, p.curve_decel_mps2)
-            speed = float(np.hypot(*v))
-            if speed > v_road:
-                v = v * (v_road / speed)
-            own = footprint_corners(q, np.array([psi]), length[k:k + 1], width[k:k + 1])[0]
-            mate_boxes = road_boxes(nb_fr[j], length[mates[j]], width[mates[j]])
-            ahead = [(mate_boxes, nb_v[j])] + ahead_boxes
-            v = safety_caps(course_limits(v, p), own, dist_w, ahead, p)
-            out[k] = self.to_xy(vid, s, d, v)
+            routes.setdefault(self.key[vid], []).append(k)
+        for key, members in routes.items():
+            idx = np.asarray(members)
+            out[idx] = self._group(key, idx, p, ego_ids, own_pos, own_vel, heading, length, width, nb_pos, nb_vel,
+                                   groups)
         return out
+
+    def _group(self, key, idx, p, ego_ids, own_pos, own_vel, heading, length, width, nb_pos, nb_vel, groups):
+        view, frame = self.views[key], self.views[key].frame
+        m = len(idx)
+        s, d = self._locate(frame, [ego_ids[k] for k in idx], own_pos[idx])
+        q = np.column_stack([s, d])
+        vq = np.column_stack(frame.velocity_to_frenet(s, d, own_vel[idx]))
+        psi = wrap_angle(heading[idx] - frame.heading_at(s))
+        L, W = length[idx], width[idx]
+        v = np.tile([p.v_flock_mps, 0.0], (m, 1))  # migration along the route
+        # flock mates (every member's state as received), near the nearest member of this route
+        near = np.argmin(np.hypot(*(nb_pos[:, None, :] - own_pos[idx][None]).transpose(2, 0, 1)), axis=1)
+        ns, nd = frame.to_frenet(nb_pos, s[near], p.r_c_m)
+        nq, nv = np.column_stack([ns, nd]), np.column_stack(frame.velocity_to_frenet(ns, nd, nb_vel))
+        i, j, r = neighbour_pairs(q, nq, p.r_c_m, same=False)
+        keep = j != idx[i]
+        i, j, r = i[keep], j[keep], r[keep]
+        v = v + repulsion(q, nq, i, j, r, p, m) + friction(vq, nv, i, j, r, p, m)
+        # walls: the carriageway's bounds and the route's end
+        own = footprint_corners(q, psi, L, W)  # (M,4,2)
+        lo, hi = self.corridor(key, own[..., 0])
+        walls = np.maximum(np.stack([(own[..., 1] - lo).min(1), (hi - own[..., 1]).min(1),
+                                     view.length_m - own[..., 0].max(1)], 1), 0.0)
+        v = v + shill(vq, walls, np.broadcast_to(WALL_NORMALS, (m, 3, 2)), p)
+        # obstacles: the other vehicles' (and static obstacles') footprints
+        boxes = [[] for _ in range(m)]
+        mates = road_boxes(nq, length, width)
+        for a in range(m):
+            close = j[i == a]
+            boxes[a].append((mates[close], nv[close]))
+        for corners, vel, owner in groups:
+            gap = np.hypot(corners[None, ..., 0] - own_pos[idx, 0, None, None],
+                           corners[None, ..., 1] - own_pos[idx, 1, None, None]).min(2)  # (M,B)
+            sees = gap <= p.r_c_m
+            if owner is not None:
+                sees &= owner[None, :] == idx[:, None]
+            b = np.flatnonzero(sees.any(0))
+            if not len(b):
+                continue
+            fc, kept = self._obstacles(key, s[np.argmin(gap[:, b], axis=0)], corners[b], p.r_c_m)
+            b, fc, sees = b[kept], fc[kept], sees[:, b[kept]]
+            if not len(b):
+                continue
+            centre = fc.mean(axis=1)
+            o_vel = np.column_stack(frame.velocity_to_frenet(centre[:, 0], centre[:, 1], vel[b]))
+            dist, away = obstacle_distances(own, fc)  # (M,B')
+            dist = np.where(sees, dist, np.inf)
+            v = v + shill(vq, dist, away, p, np.broadcast_to(o_vel[None], dist.shape + (2,)))
+            for a in range(m):
+                boxes[a].append((fc[sees[a]], o_vel[sees[a]]))
+        v = combine(v, p)
+        v_road = frame.curve_speed_limit(s, np.inf, p.curve_lat_accel_mps2, p.curve_decel_mps2)
+        speed = np.hypot(v[:, 0], v[:, 1])
+        v = v * np.minimum(1.0, v_road / np.maximum(speed, 1e-12))[:, None]
+        v = np.array([safety_caps(course_limits(v[a], p), own[a], walls[a], boxes[a], p) for a in range(m)])
+        return to_xy(frame, s, d, v, self.step_s)
+
+
+WALL_NORMALS = np.array([[0.0, 1.0], [0.0, -1.0], [-1.0, 0.0]])  # inwards from the right, left bound, the end
+
+
+def obstacle_distances(own, polys):
+    """Footprint-to-footprint distances (M,B) of the egos' footprints own (M,4,2) to obstacle
+    polygons (B,k,2) in the frame, and unit directions (M,B,2) from each obstacle's nearest point
+    towards the ego (in contact: from the obstacle's centre to the ego's)."""
+    m, b = len(own), len(polys)
+    dist, p_ego, p_obs = convex_distance(np.repeat(own, b, axis=0), np.tile(polys, (m, 1, 1)))
+    away = p_ego - p_obs
+    n = np.hypot(away[:, 0], away[:, 1])
+    centre = np.repeat(own.mean(axis=1), b, axis=0) - np.tile(polys.mean(axis=1), (m, 1))
+    away = np.where((n > 1e-6)[:, None], away, centre)
+    away = away / np.maximum(np.hypot(away[:, 0], away[:, 1]), 1e-12)[:, None]
+    return dist.reshape(m, b), away.reshape(m, b, 2)
+
+
+def to_xy(frame, s, d, v, lead_s: float) -> np.ndarray:
+    """(M,2) plane velocities of the commands v (M,2) = (s_dot, d_dot), with the commands'
+    magnitudes, the frame taken one step of travel ahead (RoadView.to_xy_velocity, vectorised)."""
+    speed = np.hypot(v[:, 0], v[:, 1])
+    xy = frame.velocity_to_xy(s + np.maximum(v[:, 0], 0.0) * lead_s, d, v[:, 0], v[:, 1])
+    n = np.hypot(xy[:, 0], xy[:, 1])
+    return np.where((n > 1e-12)[:, None] & (speed > 1e-12)[:, None], xy / np.maximum(n, 1e-12)[:, None]
+                    * speed[:, None], 0.0)
