@@ -97,9 +97,11 @@ class Carriageway:
         return np.interp(s, self._s, self._lo), np.interp(s, self._s, self._hi)
 
 
-def road_boxes(centres, length, width) -> np.ndarray:
-    """Footprints (N,4,2) in (s, d) of vehicles aligned with the road (flock mates: V2V sends no heading)."""
-    return footprint_corners(centres, np.zeros(len(centres)), length, width)
+def road_boxes(centres, vel, length, width) -> np.ndarray:
+    """Footprints (N,4,2) in (s, d) of the flock mates (V2V sends no heading): along their velocity
+    (s_dot, d_dot) when they move faster than 1 m/s, else along the road."""
+    moving = np.hypot(vel[:, 0], vel[:, 1]) > 1.0
+    return footprint_corners(centres, np.where(moving, np.arctan2(vel[:, 1], vel[:, 0]), 0.0), length, width)
 
 
 def safety_caps(v, own, walls, boxes, p: FlockingParams) -> np.ndarray:
@@ -107,10 +109,10 @@ def safety_caps(v, own, walls, boxes, p: FlockingParams) -> np.ndarray:
     hard bounds, so that the sum of the terms never drives into a bound or a vehicle:
 
     * along the road: s_dot <= max(s_dot_o, 0) + D(gap - road_gap_m) for every footprint o ahead
-      that overlaps the ego's strip across the road (gap: rear of o minus front of the ego), and
-      s_dot <= D(distance to the route's end - r0_shill);
+      that overlaps the ego's strip across the road widened by side_gap_m on each side (gap: rear
+      of o minus front of the ego), and s_dot <= D(distance to the route's end - r0_shill);
     * across it, for every footprint o beside (overlapping the ego's extent along the road): the
-      speed towards it at most d_dot_o + D(gap - r0_shill);
+      speed towards it at most d_dot_o + D(gap - side_gap_m);
     * across it, last (the road wins): d_dot >= -D(rho_right - wall_margin), d_dot <= D(rho_left -
       wall_margin), rho the footprint's distance to each bound (0 past it: never further out).
 
@@ -124,11 +126,12 @@ def safety_caps(v, own, walls, boxes, p: FlockingParams) -> np.ndarray:
                           for b, _ in boxes]) if boxes else np.zeros((0, 4))
     vel = np.concatenate([u for _, u in boxes]) if boxes else np.zeros((0, 2))
     o_rear, o_front, o_lo, o_hi = ext.T
-    ahead = (o_hi > lo) & (o_lo < hi) & (o_rear > 0.5 * (rear + front))
+    g_side = p.side_gap_m
+    ahead = (o_hi > lo - g_side) & (o_lo < hi + g_side) & (o_rear > 0.5 * (rear + front))
     beside = (o_front > rear) & (o_rear < front)
     left, right = beside & (o_lo >= 0.5 * (lo + hi)), beside & (o_hi <= 0.5 * (lo + hi))
     r = np.concatenate([[walls[0] - m, walls[1] - m, walls[2] - r0], o_rear[ahead] - front - p.road_gap_m,
-                        o_lo[left] - hi - r0, lo - o_hi[right] - r0])
+                        o_lo[left] - hi - g_side, lo - o_hi[right] - g_side])
     speed = D(r, a, g)  # one call: the braking curve at every distance
     n1, n2 = 3 + int(ahead.sum()), 3 + int(ahead.sum()) + int(left.sum())
     cap_s = min(speed[2], float(np.min(np.maximum(vel[ahead, 0], 0.0) + speed[3:n1], initial=np.inf)))
@@ -246,7 +249,7 @@ class RoadFlock:
         v = v + shill(vq, walls, np.broadcast_to(WALL_NORMALS, (m, 3, 2)), p)
         # obstacles: the other vehicles' (and static obstacles') footprints
         boxes = [[] for _ in range(m)]
-        mates = road_boxes(nq, length, width)
+        mates = road_boxes(nq, nv, length, width)
         for a in range(m):
             close = j[i == a]
             boxes[a].append((mates[close], nv[close]))

@@ -68,6 +68,8 @@ class FlockingParams:
     max_course_deg: float = field_doc(35.0, doc="on roads, moving forward: the desired direction stays within this angle "
                                                 "of the road's (a car cannot move sideways), deg")
     max_lat_speed_mps: float = field_doc(1.5, doc="on roads: the desired speed across the road stays below this, m/s")
+    side_gap_m: float = field_doc(0.5, doc="on roads: clearance the braking-curve bound keeps to a vehicle beside the "
+                                           "ego, and the margin within which one ahead counts as in its strip, m")
     road_gap_m: float = field_doc(2.0, doc="on roads: gap to a vehicle ahead in the ego's strip at which the braking "
                                            "curve (a_shill, p_shill) asks the ego to match its speed, m")
 

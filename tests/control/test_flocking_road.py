@@ -63,10 +63,11 @@ def test_safety_caps_hand_values():
     box = footprint_corners(np.array([[16.0, 0.5]]), np.zeros(1), np.array([4.0]), np.array([2.0]))
     v = safety_caps(np.array([25.0, 0.0]), own, np.array([1.3, 2.3, 500.0]), [(box, np.array([[10.0, 0.0]]))], P8)
     assert v[0] == pytest.approx(10.0 + _D(12.0 - P8.road_gap_m, a, g))  # 10 + 9.1287 (sqrt(8.36*10 - 0.265))
-    # the same car beside (s overlap), 1.0 m to the left, drifting towards the ego at 0.5 m/s
+    # the same car beside (s overlap), 1.0 m to the left, drifting towards the ego at 0.5 m/s: closing
+    # speed at most D(1.0 - side_gap 0.5)
     box = footprint_corners(np.array([[1.0, 3.0]]), np.zeros(1), np.array([4.0]), np.array([2.0]))
     v = safety_caps(np.array([15.0, 3.0]), own, np.array([1.3, 2.3, 500.0]), [(box, np.array([[15.0, -0.5]]))], P8)
-    assert v[0] == 15.0 and v[1] == pytest.approx(-0.5 + _D(1.0 - P8.r0_shill_m, a, g))
+    assert v[0] == 15.0 and v[1] == pytest.approx(-0.5 + _D(1.0 - P8.side_gap_m, a, g))  # 1.4787
     # past the right bound (distance 0): never further out; the route's end 5 m ahead
     v = safety_caps(np.array([15.0, -1.0]), own, np.array([0.0, 3.0, 5.0]), [], P8)
     assert v[1] == 0.0 and v[0] == pytest.approx(_D(5.0 - P8.r0_shill_m, a, g))
