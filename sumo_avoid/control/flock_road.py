@@ -277,7 +277,9 @@ class RoadFlock:
         v_road = frame.curve_speed_limit(s, np.inf, p.curve_lat_accel_mps2, p.curve_decel_mps2)
         speed = np.hypot(v[:, 0], v[:, 1])
         v = v * np.minimum(1.0, v_road / np.maximum(speed, 1e-12))[:, None]
-        v = np.array([safety_caps(course_limits(v[a], p), own[a], walls[a], boxes[a], p) for a in range(m)])
+        # the course limits again after the caps: a cap on s_dot must not leave a sideways command
+        v = np.array([course_limits(safety_caps(course_limits(v[a], p), own[a], walls[a], boxes[a], p), p)
+                      for a in range(m)])
         return to_xy(frame, s, d, v, self.step_s)
 
 
