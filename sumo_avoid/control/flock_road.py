@@ -108,9 +108,10 @@ def safety_caps(v, own, walls, boxes, p: FlockingParams) -> np.ndarray:
     """The desired velocity (s_dot, d_dot) with the model's braking curve D(r, a_shill, p_shill) as
     hard bounds, so that the sum of the terms never drives into a bound or a vehicle:
 
-    * along the road: s_dot <= max(s_dot_o, 0) + D(gap - road_gap_m) for every footprint o ahead
-      that overlaps the ego's strip across the road widened by side_gap_m on each side (gap: rear
-      of o minus front of the ego), and s_dot <= D(distance to the route's end - r0_shill);
+    * along the road: s_dot <= sqrt(max(s_dot_o, 0)^2 + D(gap - road_gap_m)^2) for every footprint
+      o ahead that overlaps the ego's strip across the road widened by side_gap_m on each side (gap:
+      rear of o minus front of the ego; D^2 ~ 2 a_shill gap: the ego stops behind o even if o
+      brakes to a stop at a_shill), and s_dot <= D(distance to the route's end - r0_shill);
     * across it, for every footprint o beside (overlapping the ego's extent along the road): the
       speed towards it at most d_dot_o + D(gap - side_gap_m);
     * across it, last (the road wins): d_dot >= -D(rho_right - wall_margin), d_dot <= D(rho_left -
@@ -134,7 +135,7 @@ def safety_caps(v, own, walls, boxes, p: FlockingParams) -> np.ndarray:
                         o_lo[left] - hi - g_side, lo - o_hi[right] - g_side])
     speed = D(r, a, g)  # one call: the braking curve at every distance
     n1, n2 = 3 + int(ahead.sum()), 3 + int(ahead.sum()) + int(left.sum())
-    cap_s = min(speed[2], float(np.min(np.maximum(vel[ahead, 0], 0.0) + speed[3:n1], initial=np.inf)))
+    cap_s = min(speed[2], float(np.min(np.hypot(np.maximum(vel[ahead, 0], 0.0), speed[3:n1]), initial=np.inf)))
     cap_hi = float(np.min(vel[left, 1] + speed[n1:n2], initial=np.inf))
     cap_lo = float(np.max(vel[right, 1] - speed[n2:], initial=-np.inf))
     vs, vd = min(float(v[0]), cap_s), float(v[1])

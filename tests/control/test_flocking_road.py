@@ -62,7 +62,9 @@ def test_safety_caps_hand_values():
     # a car 12 m ahead (rear at s 14, front of the ego at 2) in the ego's strip, driving 10 m/s
     box = footprint_corners(np.array([[16.0, 0.5]]), np.zeros(1), np.array([4.0]), np.array([2.0]))
     v = safety_caps(np.array([25.0, 0.0]), own, np.array([1.3, 2.3, 500.0]), [(box, np.array([[10.0, 0.0]]))], P8)
-    assert v[0] == pytest.approx(10.0 + _D(12.0 - P8.road_gap_m, a, g))  # 10 + 9.1287 (sqrt(8.36*10 - 0.265))
+    # sqrt(10^2 + D(12 - 2)^2) = sqrt(100 + 8.36*10 - 0.265) = 13.5401
+    assert v[0] == pytest.approx(math.hypot(10.0, _D(12.0 - P8.road_gap_m, a, g)))
+    assert v[0] == pytest.approx(13.5401, abs=1e-4)
     # the same car beside (s overlap), 1.0 m to the left, drifting towards the ego at 0.5 m/s: closing
     # speed at most D(1.0 - side_gap 0.5)
     box = footprint_corners(np.array([[1.0, 3.0]]), np.zeros(1), np.array([4.0]), np.array([2.0]))
