@@ -44,6 +44,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from sumo_avoid.metrics.basic import fitness
+from sumo_avoid.metrics.egos import EgoRows
 
 R_COLL_M = 3.0
 _WIDEN = 1.0 + 1e-9  # candidate searches use a slightly larger radius; the exact test comes after
@@ -51,11 +52,11 @@ _DENSE_MAX = 160  # egos per step up to which all distances of a step beat the k
 _DENSE_CHUNK = 1 << 16  # distances per chunk of steps
 
 
-def _steps(traj: pd.DataFrame):
+def _steps(traj: pd.DataFrame, egos: EgoRows | None = None):
     """Ego rows sorted by (step, id): steps, each step's first row and row count, positions,
     velocities, and the ids as integer codes (equal codes = equal ids)."""
-    e = traj[traj["is_ego"].astype(bool).to_numpy()]
-    ids = pd.factorize(e["id"].astype(str), sort=True)[0]  # codes in the order of the ids
+    egos = EgoRows.of(traj) if egos is None else egos
+    e, ids = egos.table, egos.code  # codes in the order of the ids
     o = np.lexsort((ids, e["step"].to_numpy(np.int64)))  # = sort_values(["step", "id"], kind="stable")
     step, ids = e["step"].to_numpy(np.int64)[o], ids[o]
     pos = e[["x", "y"]].to_numpy(float)[o]
@@ -174,9 +175,11 @@ def _neighbours(pos, rank, start, count, r_coll_m: float):
     return nn, a[close], b[close]
 
 
-def order_parameters(traj: pd.DataFrame, r_c_m: float, r_coll_m: float = R_COLL_M) -> dict:
-    """phi_corr, v_vel, n_disc, n_min, mean_nn_dist_m, n_coll of the egos in ``traj`` (see module doc)."""
-    uniq, start, count, pos, vel, ids = _steps(traj)
+def order_parameters(traj: pd.DataFrame, r_c_m: float, r_coll_m: float = R_COLL_M,
+                     egos: EgoRows | None = None) -> dict:
+    """phi_corr, v_vel, n_disc, n_min, mean_nn_dist_m, n_coll of the egos in ``traj`` (see module doc;
+    ``egos``: its :class:`EgoRows`, if already made)."""
+    uniq, start, count, pos, vel, ids = _steps(traj, egos)
     if uniq.size == 0:
         return {"phi_corr": 0.0, "v_vel": 0.0, "n_disc": 0.0, "n_min": 0.0, "mean_nn_dist_m": None, "n_coll": 0}
     step_of_row = np.repeat(np.arange(uniq.size), count)
@@ -212,11 +215,13 @@ def _episodes(rank: np.ndarray, id_a: np.ndarray, id_b: np.ndarray) -> int:
     return int(len(r) - cont.sum())
 
 
-def flocking_metrics(traj: pd.DataFrame, *, v_flock: float, r_c_m: float, phi_coll: float, phi_wall: float) -> dict:
+def flocking_metrics(traj: pd.DataFrame, *, v_flock: float, r_c_m: float, phi_coll: float, phi_wall: float,
+                     egos: EgoRows | None = None) -> dict:
     """Order parameters plus φ_coll, φ_wall, every partial fitness and μ (SPEC §1.1-1.2).
     N (for μ_disc, μ_cluster) = the number of distinct egos in the run."""
-    op = order_parameters(traj, r_c_m)
-    n_agents = int(traj.loc[traj["is_ego"].astype(bool), "id"].nunique())
+    egos = EgoRows.of(traj) if egos is None else egos
+    op = order_parameters(traj, r_c_m, egos=egos)
+    n_agents = len(egos.ids)
     fit = fitness(op["v_vel"], v_flock, phi_coll, op["n_disc"], op["n_min"], phi_wall, op["phi_corr"],
                   max(n_agents, 1))
     return {**op, "phi_coll": float(phi_coll), "phi_wall": float(phi_wall), "n_agents": n_agents, **fit}
