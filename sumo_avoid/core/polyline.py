@@ -117,7 +117,7 @@ def polyline_track(path, points, s_start: float | None = None, window_m: float =
             continue
         lo, hi = _window(cum_l, prev, window_m)
         if hi - lo < 2:
-            if hi <= lo:  # the window misses the path (s_start beyond its end)
+            if hi <= lo:  # no vertex in the window (a start beyond the end; a zero window on a repeated vertex)
                 raise ValueError("empty polyline")
             prev = cum_l[lo]
         elif lo == 0 and hi == last:

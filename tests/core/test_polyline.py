@@ -1,4 +1,5 @@
 import numpy as np
+import pytest
 
 from sumo_avoid.core.polyline import polyline_project_many, polyline_track
 
@@ -46,8 +47,14 @@ def test_tracking_gives_the_floats_of_a_projection_per_point():
         along = np.clip(np.cumsum(rng.integers(-1, 3, 30)), 0, n_vertices - 1)
         pts = path[along] + rng.normal(0.0, 3.0, (30, 2))
         start = None if trial % 3 else float(rng.uniform(0.0, 20.0))
-        for window in (30.0, 2.0, 500.0):
-            new = polyline_track(path, pts, start, window)
-            assert new.tobytes() == _track_point_by_point(path, pts, start, window).tobytes()
-            assert polyline_track(path, pts[:1], start, window).tobytes() == \
-                _track_point_by_point(path, pts[:1], start, window).tobytes()
+        for window in (30.0, 2.0, 500.0, 0.0):  # 0: windows of one vertex, or none (both raise then)
+            for q in (pts, pts[:1]):
+                try:
+                    ref = _track_point_by_point(path, q, start, window).tobytes()
+                except ValueError:
+                    with pytest.raises(ValueError, match="empty polyline"):
+                        polyline_track(path, q, start, window)
+                    continue
+                assert polyline_track(path, q, start, window).tobytes() == ref
+    assert polyline_track([[1.0, 2.0]], [[5.0, 5.0], [6.0, 6.0]]).tolist() == [0.0, 0.0]  # a one-vertex path
+    assert polyline_track(U_TURN, np.zeros((0, 2))).shape == (0,)
