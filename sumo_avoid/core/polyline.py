@@ -2,6 +2,8 @@
 at many vehicles at once. Pure numpy; shared by sensing, control and metrics."""
 from __future__ import annotations
 
+from bisect import bisect_left, bisect_right
+
 import numpy as np
 
 
@@ -68,23 +70,64 @@ def polyline_project_many(path, points) -> np.ndarray:
     return _cumlen(p)[k] + t[rows, k] * np.sqrt(l2[k])
 
 
+def _window(cum: list, s_m: float, window_m: float) -> tuple[int, int]:
+    """Vertex range [lo, hi) of the part of a polyline (vertex arc lengths ``cum``) within
+    ``window_m`` of arc length ``s_m``, with the vertices that bound it."""
+    return max(0, bisect_right(cum, s_m - window_m) - 1), min(len(cum), bisect_left(cum, s_m + window_m) + 1)
+
+
 def polyline_track(path, points, s_start: float | None = None, window_m: float = 30.0) -> np.ndarray:
     """Arc lengths (N,) of consecutive positions of one vehicle along ``path``: each point is
     projected on the part of the path within ``window_m`` of the previous one's arc length (the
     first: of ``s_start``, or on the whole path), so a route that comes back past itself (a
-    turnaround, a loop, a roundabout) is followed branch by branch instead of jumping."""
+    turnaround, a loop, a roundabout) is followed branch by branch instead of jumping.
+
+    Every point's foot and squared distance on every segment are computed at once (as
+    :func:`polyline_project_many` computes them); only the choice of the nearest segment inside
+    the window, which depends on the previous point, is a loop. The window's arc length is summed
+    from its first vertex, as a projection on the window alone would sum it."""
     p = _as_path(path)
     q = np.asarray(points, dtype=float).reshape(-1, 2)
-    cum = _cumlen(p)
     out = np.zeros(len(q))
+    cum = _cumlen(p)
+    cum_l, last = cum.tolist(), len(p)
+    if len(q) == 1 and s_start is not None:  # one step of a vehicle followed live: its window only
+        lo, hi = _window(cum_l, s_start, window_m)
+        return np.array([float(cum[lo] + polyline_project_many(p[lo:hi], q)[0])])
+    if len(p) == 1 or len(q) == 0:
+        return out
+    a, d = p[:-1], p[1:] - p[:-1]
+    l2 = np.einsum("ij,ij->i", d, d)
+    seg_len = np.sqrt(l2)
+    rel = q[:, None, :] - a[None]  # (N, S, 2)
+    t = np.clip(np.einsum("nsk,sk->ns", rel, d) / np.where(l2 > 0, l2, 1.0), 0.0, 1.0) * (l2 > 0)
+    gap = rel - t[..., None] * d[None]
+    dist2 = np.einsum("nsk,nsk->ns", gap, gap)
+    seg = np.hypot(*d.T).tolist()  # the segment lengths _cumlen sums
+    rows = np.arange(len(q))
+    k_all = np.argmin(dist2, axis=1)  # nearest segment of the whole path, and the arc length there
+    s_all = cum[k_all] + t[rows, k_all] * seg_len[k_all]
+    s_win = (cum[0] + s_all).tolist()  # the same as a window that spans the whole path
+    s_all = s_all.tolist()
     prev = s_start
-    for i, point in enumerate(q):
+    for i in range(len(q)):
         if prev is None:
-            prev = float(polyline_project_many(p, point[None])[0])
+            prev = s_all[i]
+            out[i] = prev
+            continue
+        lo, hi = _window(cum_l, prev, window_m)
+        if hi - lo < 2:
+            if hi <= lo:  # no vertex in the window (a start beyond the end; a zero window on a repeated vertex)
+                raise ValueError("empty polyline")
+            prev = cum_l[lo]
+        elif lo == 0 and hi == last:
+            prev = s_win[i]
         else:
-            lo = max(0, int(np.searchsorted(cum, prev - window_m, side="right")) - 1)
-            hi = min(len(p), int(np.searchsorted(cum, prev + window_m, side="left")) + 1)
-            prev = float(cum[lo] + polyline_project_many(p[lo:hi], point[None])[0])
+            k = lo + int(np.argmin(dist2[i, lo:hi - 1]))
+            along = 0.0
+            for j in range(lo, k):  # in order, as _cumlen sums the window
+                along += seg[j]
+            prev = float(cum[lo] + (along + t[i, k] * seg_len[k]))
         out[i] = prev
     return out
 

@@ -13,13 +13,14 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from sumo_avoid.core.curves import braking_curve_D  # noqa: F401  (SPEC §1 eq. 3; tests and fitness)
+from sumo_avoid.core.curves import braking_curve_D  # SPEC §1 eq. 3 (re-exported)
 from sumo_avoid.core.geometry import convex_distance, convex_overlap, footprint_corners
+from sumo_avoid.metrics.egos import EgoRows
 from sumo_avoid.metrics.pairs import Rows
 
 __all__ = [
-    "collision_events", "min_gap_m", "phi_coll", "phi_wall",
-    "braking_curve_D", "transfer_S", "F1", "F2", "F3", "fitness", "motion_summary",
+    "F1", "F2", "F3", "braking_curve_D", "collision_events", "fitness", "min_gap_m", "motion_summary",
+    "phi_coll", "phi_wall", "transfer_S",
 ]
 
 _EVENT_COLS = ["step", "time_s", "a", "b", "x", "y"]
@@ -244,7 +245,7 @@ def fitness(v_vel, v_flock, phi_coll, n_disc, n_min, phi_wall, phi_corr, n_agent
 # ---------------------------------------------------------------------------------------------
 # motion summary
 # ---------------------------------------------------------------------------------------------
-def motion_summary(traj: pd.DataFrame, goals: dict, goal_tol_m: float) -> dict:
+def motion_summary(traj: pd.DataFrame, goals: dict, goal_tol_m: float, egos: EgoRows | None = None) -> dict:
     """Per-ego and aggregate motion figures.
 
     Per ego present in ``traj`` (rows with is_ego): ``goal_reached`` (its centre came within
@@ -259,14 +260,15 @@ def motion_summary(traj: pd.DataFrame, goals: dict, goal_tol_m: float) -> dict:
     path_length_m = mean over egos; mean_speed_mps = mean over all ego rows (None without egos).
     Returns ``{"per_ego": {id: {...}}, **aggregates}``.
     """
-    e = traj[traj["is_ego"].astype(bool)]
+    egos = EgoRows.of(traj) if egos is None else egos
+    e = egos.table
     per: dict = {}
     if len(e) == 0:
         return {"per_ego": per, "goal_reached": None, "time_to_goal_s": None,
                 "path_length_m": None, "mean_speed_mps": None}
-    # sorted by (id, step) as sort_values(["id", "step"], kind="stable") would, but on integer codes
-    e = e.iloc[np.lexsort((e["step"].to_numpy(), pd.factorize(e["id"], sort=True)[0]))]
-    inv, uid = pd.factorize(e["id"].astype(str), sort=True)  # code of each row's id (as text), ids sorted
+    o = egos.by_id()  # sorted by (id, step) as sort_values(["id", "step"], kind="stable") would
+    e = e.iloc[o]
+    inv, uid = egos.code[o], egos.ids  # code of each row's id (as text), ids sorted
     x, y = e["x"].to_numpy(float), e["y"].to_numpy(float)
     t = e["time_s"].to_numpy(float)
     same = np.r_[False, inv[1:] == inv[:-1]]

@@ -25,6 +25,8 @@ import numpy as np
 import pandas as pd
 
 from sumo_avoid.metrics.base import Metric
+from sumo_avoid.metrics.egos import EgoRows
+from sumo_avoid.metrics.standard import ego_rows
 from sumo_avoid.rollout.result import RunResult
 
 
@@ -32,15 +34,16 @@ def _wrap(a):
     return np.pi - np.mod(np.pi - a, 2.0 * np.pi)  # into (-pi, pi]
 
 
-def comfort(traj: pd.DataFrame) -> dict:
-    """``max_abs_jerk_mps3`` and ``max_lat_accel_mps2`` over the egos of a trajectory table."""
-    e = traj[traj["is_ego"].astype(bool)]
+def comfort(traj: pd.DataFrame, egos: EgoRows | None = None) -> dict:
+    """``max_abs_jerk_mps3`` and ``max_lat_accel_mps2`` over the egos of a trajectory table
+    (``egos``: its :class:`EgoRows`, if already made)."""
+    egos = EgoRows.of(traj) if egos is None else egos
+    e = egos.table
     none = {"max_abs_jerk_mps3": None, "max_lat_accel_mps2": None}
     if len(e) < 3:
         return none
-    code = pd.factorize(e["id"].astype(str), sort=True)[0]
-    o = np.lexsort((e["step"].to_numpy(), code))
-    code = code[o]
+    o = egos.by_id()
+    code = egos.code[o]
     t = e["time_s"].to_numpy(float)[o]
     x, y = e["x"].to_numpy(float)[o], e["y"].to_numpy(float)[o]
     h, s = e["heading"].to_numpy(float)[o], e["speed"].to_numpy(float)[o]
@@ -72,4 +75,4 @@ class Comfort(Metric):
     """Largest longitudinal jerk and lateral acceleration of any ego (per ego, max over egos)."""
 
     def compute(self, run: RunResult) -> dict:
-        return comfort(run.traj)
+        return comfort(run.traj, ego_rows(run))

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.metrics.order import flocking_metrics
-from sumo_avoid.metrics.standard import phi_coll, phi_wall
+from sumo_avoid.metrics.standard import ego_rows, phi_coll, phi_wall
 from sumo_avoid.rollout.result import RunResult
 
 
@@ -15,4 +15,4 @@ class FlockingOrder(Metric):
     def compute(self, run: RunResult) -> dict:
         p = run.scenario.controller_params["flocking"]  # v_flock and r_c: [controllers.flocking], whoever drove
         return flocking_metrics(run.traj, v_flock=p.v_flock_mps, r_c_m=p.r_c_m, phi_coll=phi_coll(run),
-                                phi_wall=phi_wall(run))
+                                phi_wall=phi_wall(run), egos=ego_rows(run))

@@ -24,10 +24,13 @@ How it is computed, all steps at once (no loop over steps except where a step's 
   with several groups are the r_c pairs listed (the step's own cKDTree, as before) and the groups
   they join merged; one ``connected_components`` over the groups of the whole run gives the
   clusters. The result is the connected components of the r_c graph, exactly.
-* Nearest neighbour and collisions: one cKDTree of (x, y, step index × gap), the gap larger than
-  any distance inside a step, so no neighbour is ever found in another step and in-step distances
-  are unchanged (the third coordinate differs by exactly 0). Pairs closer than r_coll can only
-  join egos whose nearest neighbour is that close, so only those are searched.
+* Nearest neighbour: every distance of each step (:func:`_nearest_dense`), a few steps at a time,
+  while a step has at most ``_DENSE_MAX`` egos (at N = 100 about twice as fast as a k-d tree over
+  all rows; from about 200 egos the tree wins); above, one cKDTree of (x, y, step index × gap),
+  the gap larger than any distance inside a step, so no neighbour is ever found in another step
+  and in-step distances are unchanged (the third coordinate differs by exactly 0). Both give the
+  same floats (dx² + dy², rooted). Collisions: pairs closer than r_coll can only join egos whose
+  nearest neighbour is that close, so only those are searched (a cKDTree of them, stacked so).
 * Per-step and per-cluster sums with ``np.bincount`` over the (step, id)-sorted rows, which adds in
   row order whatever the labels: with the same clusters and distances, the same floats as the
   former loop over steps (tests/metrics/test_order.py keeps it as the reference).
@@ -41,16 +44,19 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from sumo_avoid.metrics.basic import fitness
+from sumo_avoid.metrics.egos import EgoRows
 
 R_COLL_M = 3.0
 _WIDEN = 1.0 + 1e-9  # candidate searches use a slightly larger radius; the exact test comes after
+_DENSE_MAX = 160  # egos per step up to which all distances of a step beat the k-d tree (about 2x at 100)
+_DENSE_CHUNK = 1 << 16  # distances per chunk of steps
 
 
-def _steps(traj: pd.DataFrame):
+def _steps(traj: pd.DataFrame, egos: EgoRows | None = None):
     """Ego rows sorted by (step, id): steps, each step's first row and row count, positions,
     velocities, and the ids as integer codes (equal codes = equal ids)."""
-    e = traj[traj["is_ego"].astype(bool).to_numpy()]
-    ids = pd.factorize(e["id"].astype(str), sort=True)[0]  # codes in the order of the ids
+    egos = EgoRows.of(traj) if egos is None else egos
+    e, ids = egos.table, egos.code  # codes in the order of the ids
     o = np.lexsort((ids, e["step"].to_numpy(np.int64)))  # = sort_values(["step", "id"], kind="stable")
     step, ids = e["step"].to_numpy(np.int64)[o], ids[o]
     pos = e[["x", "y"]].to_numpy(float)[o]
@@ -124,15 +130,42 @@ def _nearest_two(tree: cKDTree, pts: np.ndarray):
     return d, j
 
 
-def _neighbours(pos, rank, r_coll_m: float):
+def _nearest_dense(pos, rank, start, count) -> np.ndarray:
+    """Distance to the nearest other ego of the same step (inf when alone), from every distance of
+    the step: the steps padded to the most egos of a step (NaN, which ``fmin`` skips), a few steps at
+    a time so that the (steps, N, N) arrays stay in cache. dx² + dy², then the square root of the
+    smallest, as the k-d tree sums and roots it: the same floats."""
+    n_max = int(count.max())
+    col = np.arange(len(pos)) - start[rank]
+    pad = np.full((len(count), n_max, 2), np.nan)
+    pad[rank, col] = pos
+    best = np.empty((len(count), n_max))
+    diag = np.arange(n_max)
+    chunk = max(1, _DENSE_CHUNK // (n_max * n_max))
+    for s0 in range(0, len(count), chunk):
+        x, y = pad[s0:s0 + chunk, :, 0], pad[s0:s0 + chunk, :, 1]
+        d2, dy = x[:, :, None] - x[:, None, :], y[:, :, None] - y[:, None, :]
+        d2 *= d2
+        dy *= dy
+        d2 += dy
+        d2[:, diag, diag] = np.inf
+        best[s0:s0 + chunk] = np.fmin.reduce(d2, axis=2)
+    return np.sqrt(best[rank, col])
+
+
+def _neighbours(pos, rank, start, count, r_coll_m: float):
     """Distance to the nearest other ego of the same step (NaN when alone) and the row pairs
     (a < b) of one step closer than r_coll (strictly, centre distance)."""
     n = len(pos)
     gap = 2.0 * float(np.ptp(pos[:, 0]) + np.ptp(pos[:, 1])) + 2.0 * r_coll_m + 1.0  # > any in-step distance
     stacked = np.column_stack([pos, rank * gap])
-    d, j = _nearest_two(cKDTree(stacked, balanced_tree=False, compact_nodes=False), stacked)  # fastest build here
-    j = np.minimum(j[:, 1], n - 1)  # k=2 with a single row overall gives j = n (missing)
-    nn = np.where(np.isfinite(d[:, 1]) & (rank[j] == rank), d[:, 1], np.nan)
+    if count.max() <= _DENSE_MAX:
+        nn = _nearest_dense(pos, rank, start, count)
+        nn[~np.isfinite(nn)] = np.nan
+    else:
+        d, j = _nearest_two(cKDTree(stacked, balanced_tree=False, compact_nodes=False), stacked)  # fastest build
+        j = np.minimum(j[:, 1], n - 1)  # k=2 with a single row overall gives j = n (missing)
+        nn = np.where(np.isfinite(d[:, 1]) & (rank[j] == rank), d[:, 1], np.nan)
     # both ends of a pair closer than r_coll have their nearest neighbour that close
     cand = np.flatnonzero(nn < r_coll_m * _WIDEN)
     pr = cKDTree(stacked[cand]).query_pairs(r_coll_m * _WIDEN, output_type="ndarray") if len(cand) > 1 \
@@ -142,21 +175,23 @@ def _neighbours(pos, rank, r_coll_m: float):
     return nn, a[close], b[close]
 
 
-def order_parameters(traj: pd.DataFrame, r_c_m: float, r_coll_m: float = R_COLL_M) -> dict:
-    """phi_corr, v_vel, n_disc, n_min, mean_nn_dist_m, n_coll of the egos in ``traj`` (see module doc)."""
-    uniq, start, count, pos, vel, ids = _steps(traj)
+def order_parameters(traj: pd.DataFrame, r_c_m: float, r_coll_m: float = R_COLL_M,
+                     egos: EgoRows | None = None) -> dict:
+    """phi_corr, v_vel, n_disc, n_min, mean_nn_dist_m, n_coll of the egos in ``traj`` (see module doc;
+    ``egos``: its :class:`EgoRows`, if already made)."""
+    uniq, start, count, pos, vel, ids = _steps(traj, egos)
     if uniq.size == 0:
         return {"phi_corr": 0.0, "v_vel": 0.0, "n_disc": 0.0, "n_min": 0.0, "mean_nn_dist_m": None, "n_coll": 0}
     step_of_row = np.repeat(np.arange(uniq.size), count)
     speed = np.hypot(vel[:, 0], vel[:, 1])
     unit = np.where((speed > 1e-9)[:, None], vel / np.maximum(speed, 1e-9)[:, None], 0.0)
     ncomp, label = _clusters(pos, step_of_row, start, count, r_c_m)  # components never span two steps
-    nn, ca, cb = _neighbours(pos, step_of_row, r_coll_m)
+    nn, ca, cb = _neighbours(pos, step_of_row, start, count, r_coll_m)
     size = np.bincount(label, minlength=ncomp)[label]  # N_i per row
     usum = np.column_stack([np.bincount(label, unit[:, 0], ncomp), np.bincount(label, unit[:, 1], ncomp)])
     inner = (unit * usum[label]).sum(1) - (unit * unit).sum(1)
     corr_i = np.where(size > 1, inner / np.maximum(size - 1, 1), 0.0)
-    per_step = lambda x: np.bincount(step_of_row, x, uniq.size)  # noqa: E731
+    per_step = lambda x: np.bincount(step_of_row, x, uniq.size)
     phi_corr = float(np.mean(per_step(corr_i) / count))
     v_vel = float(np.mean(per_step(speed) / count))
     n_disc = float(np.mean(per_step((size == 1).astype(float))))
@@ -180,11 +215,13 @@ def _episodes(rank: np.ndarray, id_a: np.ndarray, id_b: np.ndarray) -> int:
     return int(len(r) - cont.sum())
 
 
-def flocking_metrics(traj: pd.DataFrame, *, v_flock: float, r_c_m: float, phi_coll: float, phi_wall: float) -> dict:
+def flocking_metrics(traj: pd.DataFrame, *, v_flock: float, r_c_m: float, phi_coll: float, phi_wall: float,
+                     egos: EgoRows | None = None) -> dict:
     """Order parameters plus φ_coll, φ_wall, every partial fitness and μ (SPEC §1.1-1.2).
     N (for μ_disc, μ_cluster) = the number of distinct egos in the run."""
-    op = order_parameters(traj, r_c_m)
-    n_agents = int(traj.loc[traj["is_ego"].astype(bool), "id"].nunique())
+    egos = EgoRows.of(traj) if egos is None else egos
+    op = order_parameters(traj, r_c_m, egos=egos)
+    n_agents = len(egos.ids)
     fit = fitness(op["v_vel"], v_flock, phi_coll, op["n_disc"], op["n_min"], phi_wall, op["phi_corr"],
                   max(n_agents, 1))
     return {**op, "phi_coll": float(phi_coll), "phi_wall": float(phi_wall), "n_agents": n_agents, **fit}

@@ -20,17 +20,19 @@ import numpy as np
 import pandas as pd
 
 from sumo_avoid.metrics.base import Metric
+from sumo_avoid.metrics.egos import EgoRows
+from sumo_avoid.metrics.standard import ego_rows
 from sumo_avoid.rollout.arena import outside_distance as arena_outside_distance
 from sumo_avoid.rollout.result import RunResult
 
 
-def ego_segments(traj: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+def ego_segments(traj: pd.DataFrame, egos: EgoRows | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Every ego's consecutive rows (by step) as segments: (K,2) midpoints and (K,2) displacements, m;
     segments of zero length are left out."""
-    e = traj[traj["is_ego"].astype(bool)]
-    code = pd.factorize(e["id"].astype(str), sort=True)[0]
-    o = np.lexsort((e["step"].to_numpy(), code))
-    code = code[o]
+    egos = EgoRows.of(traj) if egos is None else egos
+    e = egos.table
+    o = egos.by_id()
+    code = egos.code[o]
     p = e[["x", "y"]].to_numpy(float)[o]
     d = np.diff(p, axis=0)
     keep = (code[1:] == code[:-1]) & (np.hypot(d[:, 0], d[:, 1]) > 0)
@@ -39,7 +41,7 @@ def ego_segments(traj: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
 
 
 def road_use(run: RunResult) -> dict:
-    mid, d = ego_segments(run.traj)
+    mid, d = ego_segments(run.traj, ego_rows(run))
     length = np.hypot(d[:, 0], d[:, 1])
     scene = run.scene
     if scene.walls is None:

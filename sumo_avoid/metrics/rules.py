@@ -55,10 +55,14 @@ def _signals_at(sig, t: float) -> dict[str, str]:
 def _ego_tracks(run: RunResult, want):
     """(ego id, task, its recorded rows, front bumper s along the route path) for the egos whose
     task has a link ``want(link)`` is true for."""
+    tasks = {vid: task for vid, task in run.tasks.items() if any(want(lk) for lk in task.links)}
+    if not tasks:
+        return
     traj = run.traj[run.traj["is_ego"]]
-    for vid, task in run.tasks.items():
-        ego = traj[traj["id"] == vid]
-        if not any(want(lk) for lk in task.links) or len(ego) < 2:
+    rows = traj.groupby("id", sort=False).indices  # each ego's row positions, in table order
+    for vid, task in tasks.items():
+        ego = traj.iloc[rows.get(vid, [])]
+        if len(ego) < 2:
             continue
         h = ego["heading"].to_numpy()
         front = ego[["x", "y"]].to_numpy() + 0.5 * ego["length"].to_numpy()[:, None] * np.column_stack([np.cos(h), np.sin(h)])

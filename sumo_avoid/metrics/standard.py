@@ -8,6 +8,7 @@ from sumo_avoid import __version__
 from sumo_avoid.core.geometry import footprint_corners
 from sumo_avoid.metrics import basic
 from sumo_avoid.metrics.base import Metric
+from sumo_avoid.metrics.egos import EgoRows
 from sumo_avoid.metrics.pairs import Rows
 from sumo_avoid.rollout.arena import outside_distance as arena_outside_distance
 from sumo_avoid.rollout.result import RunResult
@@ -26,6 +27,11 @@ def ego_outside_distance(run: RunResult) -> np.ndarray:
 def pair_rows(run: RunResult) -> Rows:
     """The table's columns and k-d tree pair search shared by collisions, min_gap and phi_coll."""
     return run.memo("pair_rows", lambda: Rows.of(run.traj))
+
+
+def ego_rows(run: RunResult) -> EgoRows:
+    """The ego rows and id codes shared by motion, comfort, road use and the order parameters."""
+    return run.memo("ego_rows", lambda: EgoRows.of(run.traj))
 
 
 def phi_coll(run: RunResult) -> float:
@@ -64,8 +70,8 @@ class Collisions(Metric):
         sumo = run.sumo_events
         ours = {tuple(sorted(p)) for p in zip(events["a"], events["b"])}
         theirs = {tuple(sorted(p)) for p in zip(sumo["a"], sumo["b"])}
-        return {"collisions": int(len(events)), "collision_events": events.to_dict(orient="records"),
-                "sumo_collisions": int(len(sumo)), "sumo_collision_events": sumo.to_dict(orient="records"),
+        return {"collisions": len(events), "collision_events": events.to_dict(orient="records"),
+                "sumo_collisions": len(sumo), "sumo_collision_events": sumo.to_dict(orient="records"),
                 "collision_pairs_only_ours": sorted(map(list, ours - theirs)),
                 "collision_pairs_only_sumo": sorted(map(list, theirs - ours)),
                 "collision_disagreements": disagreements(run.traj, events, sumo, ours - theirs, theirs - ours)}
@@ -142,4 +148,4 @@ class Motion(Metric):
     """Goal reached, time to goal, path length, mean speed, per ego."""
 
     def compute(self, run: RunResult) -> dict:
-        return basic.motion_summary(run.traj, run.goals, run.scenario.spec.ego.goal_tolerance_m)
+        return basic.motion_summary(run.traj, run.goals, run.scenario.spec.ego.goal_tolerance_m, ego_rows(run))

@@ -146,7 +146,7 @@ def _reference_order_parameters(traj, r_c_m, r_coll_m=order.R_COLL_M):
     inner = (unit * usum[label]).sum(1) - (unit * unit).sum(1)
     corr_i = np.where(size > 1, inner / np.maximum(size - 1, 1), 0.0)
     step_of_row = np.repeat(np.arange(uniq.size), count)
-    per_step = lambda x: np.bincount(step_of_row, x, uniq.size)  # noqa: E731
+    per_step = lambda x: np.bincount(step_of_row, x, uniq.size)
     smallest = np.full(uniq.size, np.inf)
     np.minimum.at(smallest, step_of_row, size.astype(float))
     nn_ok = np.isfinite(nn)
@@ -285,3 +285,35 @@ def test_no_ego_and_single_ego():
     assert order_parameters(t2, 80.0)["mean_nn_dist_m"] is None and order_parameters(t2, 80.0)["n_disc"] == 1.0
     t["is_ego"] = False
     assert order_parameters(t, 80.0) == _reference_order_parameters(t, 80.0)
+
+
+def test_nearest_neighbour_hand_values_3_4_5_triangle():
+    # a (0,0), b (3,0), c (0,4): b-c 5 m; nearest: a 3, b 3, c 4. Step 1: a alone, d 7 m off a in step 2
+    t = _table([(0, "a", 0.0, 0.0, 1.0, 0.0), (0, "b", 3.0, 0.0, 1.0, 0.0), (0, "c", 0.0, 4.0, 1.0, 0.0),
+                (1, "a", 0.0, 0.0, 1.0, 0.0),
+                (2, "a", 1.0, 1.0, 1.0, 0.0), (2, "d", 1.0, 8.0, 0.0, 1.0)])
+    uniq, start, count, pos, _, _ = order._steps(t)
+    rank = np.repeat(np.arange(uniq.size), count)
+    nn, a, b = order._neighbours(pos, rank, start, count, 3.5)
+    np.testing.assert_array_equal(nn, [3.0, 3.0, 4.0, np.nan, 7.0, 7.0])
+    assert (a.tolist(), b.tolist()) == ([0], [1])  # a-b 3 m < 3.5 m; a-c 4 m is not
+    assert order_parameters(t, r_c_m=80.0)["mean_nn_dist_m"] == (10.0 / 3.0 + 7.0) / 2  # steps with a neighbour
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_dense_nearest_neighbour_equals_the_tree(seed, monkeypatch):
+    """The dense per-step distances (up to _DENSE_MAX egos a step) give the k-d tree's floats, bit for
+    bit, and the same close pairs; steps with one ego, none, and varying counts included."""
+    rng = np.random.default_rng(50 + seed)
+    t = _random_run(seed, int(rng.integers(2, 90)), int(rng.integers(6, 60)))
+    uniq, start, count, pos, _, _ = order._steps(t)
+    rank = np.repeat(np.arange(uniq.size), count)
+    dense = order._neighbours(pos, rank, start, count, 3.0)
+    monkeypatch.setattr(order, "_DENSE_MAX", 0)
+    tree = order._neighbours(pos, rank, start, count, 3.0)
+    assert dense[0].tobytes() == tree[0].tobytes()
+    np.testing.assert_array_equal(dense[1], tree[1])
+    np.testing.assert_array_equal(dense[2], tree[2])
+    monkeypatch.setattr(order, "_DENSE_MAX", 10_000)
+    monkeypatch.setattr(order, "_DENSE_CHUNK", 1)  # one step per chunk
+    assert order._neighbours(pos, rank, start, count, 3.0)[0].tobytes() == dense[0].tobytes()
