@@ -58,20 +58,17 @@ from sumo_avoid.planning.pursuit import (
 )
 from sumo_avoid.planning.radar_map import RadarMap, static_returns
 from sumo_avoid.planning.road import (
+    CLIP_SLACK_M,
     all_lanes_corridor,
     corridor_clip,
     follow_speed,
+    in_frame,
     lane_centres,
     meeting_points,
     pick_lane,
     wall_points,
     whole_lanes,
 )
-
-#: On a road, waypoints are kept this much further inside the lanes than the lane bounds' points
-#: require: a segment between two waypoints at the margin passed the bound's points at 1.51 m
-#: instead of 1.6 m where the corridor kinks (lane pieces joining), and no path was usable.
-CLIP_SLACK_M = 0.2
 
 
 @dataclass(frozen=True)
@@ -108,7 +105,7 @@ class GaPlannerParams(GaParams):
                                                               "(or at the goal), m")
     road_replan_interval_s: float = field_doc(1.0, positive=True, doc="road: plan again at least this often "
                                                                       "(moving traffic, the horizon moves on), s")
-    road_safety_radius_m: float = field_doc(1.6, doc="road: safety_radius_m (the car's half width 0.9 m + 0.7 m), m")
+    road_safety_radius_m: float = field_doc(1.4, doc="road: safety_radius_m (the car's half width 0.9 m + 0.5 m), m")
     road_replan_margin_m: float = field_doc(1.2, doc="road: replan_margin_m, m")
     road_wall_margin_m: float = field_doc(1.6, doc="road: paths keep this far inside the lanes of the ego's "
                                                    "direction (waypoints clipped; the bounds, moved out by "
@@ -120,11 +117,12 @@ class GaPlannerParams(GaParams):
     road_shadow_depth_m: float = field_doc(4.0, doc="road: shadow_depth_m (about a car's length), m")
     road_memory_s: float = field_doc(20.0, doc="road: the map keeps only points a scan hit in this last time "
                                               "(traffic that stood and drove on leaves no obstacle), s")
-    road_corridor_margin_m: float = field_doc(0.5, doc="road: corridor_margin_m of the governor's strip, m")
+    road_corridor_margin_m: float = field_doc(0.4, doc="road: corridor_margin_m of the governor's strip, m")
     road_sense_radius_m: float = field_doc(100.0, positive=True, doc="road: vehicles farther than this are "
                                                                     "left out of the plan, m")
     road_follow_gap_m: float = field_doc(6.0, doc="road: a moving vehicle blocks its lane where the ego would be "
                                                   "closer than this (bumper to bumper) along the road, m")
+    road_gap_headway_s: float = field_doc(1.0, doc="road: that gap grows by this x the speed difference, s")
     road_lane_free_m: float = field_doc(3.0, doc="road: a plan ends on a lane centre that keeps this far from "
                                                  "every obstacle point, m")
     road_follow_decel_mps2: float = field_doc(3.0, doc="road: behind a moving vehicle, the ego could stop at this "
@@ -133,15 +131,15 @@ class GaPlannerParams(GaParams):
     road_standstill_m: float = field_doc(3.0, doc="road: following a moving vehicle, gap kept at a stop, m")
     road_wait_gap_m: float = field_doc(12.0, doc="road: while no usable path is found, the car stops this far "
                                                  "before a known point in its strip ahead (room to steer out later), m")
-    road_lane_away_m: float = field_doc(0.8, doc="road: a static point blocks the lane it lies in once moved this far "
-                                                 "across the road away from the ego (the object lies beyond its "
-                                                 "nearest point), m")
+    road_lane_tol_m: float = field_doc(0.2, doc="road: a static point blocks the whole lane it lies in unless it "
+                                                "is within this + road_lane_tol_per_m x its range of a lane line, m")
+    road_lane_tol_per_m: float = field_doc(0.0175, doc="road: see road_lane_tol_m (tan of the radar's 1 deg azimuth "
+                                                       "step), m per m")
     road_rear_clear_m: float = field_doc(20.0, doc="road: a car blocked by the governor backs up only when no "
                                                    "moving vehicle is this close behind it in its lane, m")
 
     def on_road(self) -> GaPlannerParams:
-        """The parameters a plan on a road uses: the ``road_*`` values in place of the field's (no
-        cone governor: an obstacle beside the lane is no reason to slow)."""
+        """The parameters on a road: the ``road_*`` values in place of the field's, no cone governor."""
         return replace(self, safety_radius_m=self.road_safety_radius_m, replan_margin_m=self.road_replan_margin_m,
                        init_spread_m=self.road_init_spread_m, mutation_sigma_m=self.road_mutation_sigma_m,
                        face_half_width_m=self.road_face_half_width_m, shadow_depth_m=self.road_shadow_depth_m,
@@ -189,8 +187,7 @@ def arena_bounds(walls, margin_m: float):
 
 
 def rest_of(path, s_m: float, pos) -> np.ndarray:
-    """What is left of a path for a car at ``pos`` that has come ``s_m`` along it: ``pos``, then
-    the path's vertices beyond s (the warm start of the next plan, and what the clearance trigger checks)."""
+    """``pos``, then the path's vertices beyond arc length ``s_m`` (warm start; the clearance trigger)."""
     return np.concatenate([np.asarray(pos, float)[None], path[np.searchsorted(arc_lengths(path), s_m, side="right"):]])
 
 
@@ -290,14 +287,14 @@ class GaPlannerController:
         p, view = self.pr, st.view
         s0, d0 = sc.s, sc.d
         s_end = min(s0 + p.road_horizon_m, float(view.goal[0]))
-        xy = self._points(st)
-        xy = xy[np.hypot(*(xy - st.pos).T) < p.road_horizon_m + 20.0] if len(xy) else xy
-        ss, dd = view.frame.to_frenet(xy, np.full(len(xy), s0), p.road_horizon_m + 20.0) if len(xy) else (xy[:, 0], xy[:, 1])
-        static = np.column_stack([ss, dd])[(ss > s0 - 10.0) & (ss < s_end + 10.0)]
-        static = whole_lanes(static, st.task.lanes, d0, p.road_lane_away_m)
-        v_plan = max(float(sc.vel[0]), 1.0)  # constant velocity, the ego's as the others'
+        static = whole_lanes(in_frame(self._points(st), st.pos, view.frame, s0, s_end, p.road_horizon_m + 20.0),
+                             st.task.lanes, s0, d0, p.road_lane_tol_m, p.road_lane_tol_per_m)
+        # at least half its cruise speed: a car waiting for a gap accelerates into it (planned at 1 m/s,
+        # every car within 20 s behind blocked the next lane beside it, and the gap never came)
+        v_plan = max(float(sc.vel[0]), 0.5 * st.task.cruise_speed_mps)
         ahead = meeting_points(sc.o_pos[moving], sc.o_vel[moving], sc.o_length[moving], sc.o_width[moving], s0, d0,
-                               v_plan, sc.length, p.road_follow_gap_m, s_end + 10.0, 1.0, 0.5 * sc.width + 0.6)
+                               v_plan, sc.length, p.road_follow_gap_m, s_end + 10.0, 1.0, 0.5 * sc.width + 0.6,
+                               p.road_gap_headway_s)
         known = np.concatenate([static, ahead])
         if s_end >= float(view.goal[0]):
             goal = view.goal
@@ -313,8 +310,7 @@ class GaPlannerController:
         t0 = time.perf_counter()
         res = plan((s0, d0), goal, pts, p, self.rng, corridor_clip(st.corridor, p.road_wall_margin_m + CLIP_SLACK_M, s0, s_end), warm)
         ms = 1e3 * (time.perf_counter() - t0)
-        # no usable path (traffic beside, or no way past yet): keep to the current offset, the
-        # governors stop the car before what is in it, and plan again
+        # no usable path (traffic beside, no way past yet): keep the current offset, plan again
         drive = res.path if res.usable else np.array([[s0, d0], [s_end, d0]])
         dense = resample(drive, max(2, int(np.ceil(arc_lengths(drive)[-1] / 2.0)) + 1))
         st.path_sd, st.usable, st.s, st.last_plan_s = drive, res.usable, 0.0, t
@@ -340,9 +336,7 @@ class GaPlannerController:
         return out
 
     def _road_step(self, st: _Ego, obs: Observation, k: int, row: int, vid: str) -> np.ndarray:
-        """One step on a road: plan in the route frame when triggered (or every
-        ``road_replan_interval_s``), track the path, and stay behind moving vehicles in the strip
-        ahead (the path's lane at their s, and the ego's own)."""
+        """One step on a road: plan in the route frame, track, stay behind moving vehicles in the strip."""
         p, snap = self.pr, obs.snapshot
         pos, t = snap.pos[row], snap.time_s
         st.now, st.pos = t, np.asarray(pos, float)

@@ -8,7 +8,8 @@ across it, left positive; :mod:`sumo_avoid.core.frenet`). Pure numpy, no SUMO.
   between two waypoints keeps the margin from them too.
 * **Moving vehicles** (:func:`meeting_points`): constant-velocity prediction along the road. With
   the ego planned at speed v, a vehicle at (s_j, d_j) moving at s_dot_j is within the longitudinal
-  gap G = (L_j + L_ego)/2 + gap_m of the ego while |(s_j - s_ego) + (s_dot_j - v) t| < G; the
+  gap G = (L_j + L_ego)/2 + gap_m + headway_s |s_dot_j - v| (a faster car coming up behind needs
+  room to brake for the ego) of the ego while |(s_j - s_ego) + (s_dot_j - v) t| < G; the
   stretch of road the ego covers during that time, s_ego + v t, is marked at the vehicle's d (its
   two sides and its centre line). A slower car ahead thus blocks its lane where the ego would catch
   up with it, a faster car behind the stretch where it would come alongside, a car keeping pace
@@ -23,6 +24,22 @@ from __future__ import annotations
 import numpy as np
 
 from sumo_avoid.core.types import LanePiece
+
+#: Waypoints are kept this much further inside the lanes than the lane bounds' points require: a
+#: segment between two waypoints at the margin passed the bound's points at 1.51 m instead of 1.6 m
+#: where the corridor kinks (lane pieces joining), and no path was usable.
+CLIP_SLACK_M = 0.2
+
+
+def in_frame(xy, pos, frame, s0: float, s_end: float, reach_m: float) -> np.ndarray:
+    """(M, 2) the points ``xy`` (K, 2) within ``reach_m`` of ``pos`` in the route frame ``frame``
+    (projected near s0), those with s in (s0 - 10 m, s_end + 10 m)."""
+    xy = np.asarray(xy, float).reshape(-1, 2)
+    xy = xy[np.hypot(*(xy - np.asarray(pos, float)).T) < reach_m]
+    if len(xy) == 0:
+        return np.zeros((0, 2))
+    s, d = frame.to_frenet(xy, np.full(len(xy), s0), reach_m)
+    return np.column_stack([s, d])[(s > s0 - 10.0) & (s < s_end + 10.0)]
 
 
 def lane_centres(pieces: tuple[LanePiece, ...], s: float) -> np.ndarray:
@@ -56,23 +73,28 @@ def all_lanes_corridor(pieces: tuple[LanePiece, ...]):
     return corridor
 
 
-def whole_lanes(points, pieces: tuple[LanePiece, ...], d_ego: float, away_m: float) -> np.ndarray:
-    """(3K, 2) for static points (s, d) (K, 2): each moved to the right bound, the centre and the left
-    bound of the lane it lies in (the lane centre of the edge at its s nearest to the point moved
-    ``away_m`` across the road away from ``d_ego``: a return is the nearest point of its object,
-    whose body lies beyond it, and the radar's azimuth steps (1 deg: 0.8 m at 45 m) put a corner
-    on the wrong side of a lane line; lane width from the edge). A standing object in a lane blocks that lane: the radar reports only an object's nearest
-    point, and its width is unknown (2.7 m of debris seen head-on gave one point; a path that kept the
-    safety radius from that point and from an assumed face ran into the rest)."""
+def whole_lanes(points, pieces: tuple[LanePiece, ...], s_ego: float, d_ego: float, tol_m: float,
+                tol_per_m: float) -> np.ndarray:
+    """Static points (s, d) (K, 2) as lane blockers: a point that lies clearly inside a lane (farther
+    than tol_m + tol_per_m x its distance from the ego from the lane's lines) becomes three points,
+    the right bound, the centre and the left bound of that lane (a standing object in a lane blocks
+    the lane: the radar reports only an object's nearest point, and 2.7 m of debris seen head-on gave
+    one point, a path that kept the safety radius from it ran into the rest); a point near a lane
+    line stays a point (the radar's 1 deg azimuth steps move a return 0.8 m across at 45 m: a corner
+    of debris in the next lane read as being in the ego's). Lane centres and widths from the edge
+    at the point's s. Returns (M, 2)."""
     pts = np.asarray(points, float).reshape(-1, 2)
-    out = np.empty((3 * len(pts), 2))
-    for k, (s, d) in enumerate(pts):
+    out = [np.zeros((0, 2))]
+    for s, d in pts:
         c = lane_centres(pieces, s)
-        i = int(np.argmin(np.abs(c - d - away_m * np.sign(d - d_ego))))
+        i = int(np.argmin(np.abs(c - d)))
         half = 0.5 * _width_at(pieces, s, i)
-        out[3 * k:3 * k + 3, 0] = s
-        out[3 * k:3 * k + 3, 1] = (c[i] - half, c[i], c[i] + half)
-    return out
+        tol = tol_m + tol_per_m * float(np.hypot(s - s_ego, d - d_ego))
+        if half - abs(d - c[i]) <= tol:
+            out.append(np.array([[s, d]]))
+        else:
+            out.append(np.array([[s, c[i] - half], [s, c[i]], [s, c[i] + half]]))
+    return np.concatenate(out)
 
 
 def _width_at(pieces, s: float, lane: int) -> float:
@@ -110,7 +132,8 @@ def wall_points(corridor, s_lo: float, s_hi: float, step_m: float, out_m: float 
 
 
 def meeting_points(o_pos, o_vel, o_len, o_wid, s_ego: float, d_ego: float, v_plan: float, ego_len: float,
-                   gap_m: float, s_end: float, step_m: float, own_lane_half_m: float) -> np.ndarray:
+                   gap_m: float, s_end: float, step_m: float, own_lane_half_m: float,
+                   headway_s: float = 0.0) -> np.ndarray:
     """(K, 2) points (s, d) marking where the ego, planned at ``v_plan`` m/s, would be within the
     longitudinal gap of moving vehicle j (centres ``o_pos`` (O, 2) (s, d), velocities ``o_vel``
     (O, 2) (s_dot, d_dot), lengths and widths (O,)), up to ``s_end`` (module docstring)."""
@@ -122,7 +145,7 @@ def meeting_points(o_pos, o_vel, o_len, o_wid, s_ego: float, d_ego: float, v_pla
         if sj < s_ego and abs(dj - d_ego) < own_lane_half_m:
             continue  # behind in the ego's own lane: it follows the ego
         g0, rel = sj - s_ego, vj - v
-        G = 0.5 * (lj + ego_len) + gap_m
+        G = 0.5 * (lj + ego_len) + gap_m + headway_s * abs(rel)
         if abs(rel) < 1e-9:
             t1, t2 = (0.0, t_end) if abs(g0) < G else (1.0, 0.0)
         else:
