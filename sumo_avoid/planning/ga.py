@@ -227,9 +227,13 @@ def initial_population(start, goal, p: GaParams, rng: np.random.Generator, bound
 
 
 def clip(pop, bounds):
-    """Waypoints kept inside the box ``bounds`` = (xmin, ymin, xmax, ymax), or unchanged if None."""
+    """Waypoints kept inside the box ``bounds`` = (xmin, ymin, xmax, ymax), or by ``bounds(pop)`` when
+    it is a function (the road's corridor, :func:`sumo_avoid.planning.road.corridor_clip`), or
+    unchanged if None."""
     if bounds is None:
         return pop
+    if callable(bounds):
+        return bounds(pop)
     lo, hi = np.asarray(bounds[:2], float), np.asarray(bounds[2:], float)
     out = pop.copy()
     out[:, 1:-1] = np.clip(pop[:, 1:-1], lo, hi)

@@ -34,12 +34,21 @@ class RadarMap:
         self._points: list[np.ndarray] = []
         self._returns = np.zeros((0, 2))  # one return per cell (not their shadows): the new-obstacle test
         self._return_cells: set[int] = set()
+        self._index: dict[int, int] = {}  # cell -> index of its point
+        self._last_seen: list[float] = []  # per point: the last scan that put a point in its cell, s
         self.rows: list[tuple] = []  # (time_s, x, y, is_return) of each kept point
 
     @property
     def points(self) -> np.ndarray:
         """(M, 2) every kept point, in the order they were added, m."""
         return np.concatenate(self._points) if self._points else np.zeros((0, 2))
+
+    def seen_since(self, time_s: float) -> np.ndarray:
+        """(M', 2) the kept points whose cell some scan at or after ``time_s`` hit again (a map
+        that forgets: on a road, traffic that stood and drove on leaves no obstacle behind), m."""
+        if not self._last_seen:
+            return np.zeros((0, 2))
+        return self.points[np.asarray(self._last_seen) >= time_s]
 
     def __len__(self) -> int:
         return len(self.rows)
@@ -64,7 +73,11 @@ class RadarMap:
         for k, key in enumerate(keys.tolist()):  # a few dozen per scan
             if key not in self._cells:
                 self._cells.add(key)
+                self._index[key] = len(self._last_seen)
+                self._last_seen.append(time_s)
                 keep.append(k)
+            else:
+                self._last_seen[self._index[key]] = time_s
             if k < len(ret) and key not in self._return_cells:  # a return where a shadow was is still a return
                 self._return_cells.add(key)
                 seen.append(k)
