@@ -139,11 +139,18 @@ class ApfSaController(ApfController):
         return out
 
     def _inside_offset(self, view: RoadView, sc: FrenetScene, offset: float) -> float:
-        """Shrink a lateral offset until the shifted carrot keeps the car inside its lanes with
-        ``escape_margin_m`` to spare on each side (a target on the kerb is no target)."""
+        """The centre of the lane nearest to a lateral offset at the carrot (SPEC §5: the ego keeps to
+        the centre of the lane it chose; an SA end point between lanes had the ego pass a car 0.48 m
+        apart on overtaking), else the offset shrunk until the shifted carrot keeps the car inside
+        its lanes with ``escape_margin_m`` to spare on each side (a target on the kerb is no target)."""
         need = 0.5 * sc.width + self.p.escape_margin_m
         s_c = min(sc.s + self.lookahead(float(np.hypot(*sc.vel))), view.length_m)  # the carrot's s
         lo, hi = (float(v[0]) for v in view.corridor([s_c]))
+        if view.lanes is not None:
+            _, centres = view.lanes.centres(s_c)
+            c = float(centres[np.argmin(np.abs(centres - offset))])
+            if lo + need <= c <= hi - need:
+                offset = c
         for k in range(int(abs(offset) / 0.25) + 1):
             o = math.copysign(max(abs(offset) - 0.25 * k, 0.0), offset)
             if lo + need <= o <= hi - need:

@@ -76,11 +76,15 @@ class RouteLanes:
         lo, hi = self.corridor([s])
         if not lo[0] <= d <= hi[0]:
             return None
+        p, centres = self.centres(s)
+        return p.edge, int(np.argmin(np.abs(centres - d)))
+
+    def centres(self, s: float) -> tuple[LanePiece, np.ndarray]:
+        """(the piece at arc length s, d of every lane centre of its edge there (by lane index), m)."""
         starts = [p.s_start_m for p in self.pieces]
         p = self.pieces[max(0, min(int(np.searchsorted(starts, s, side="right")) - 1, len(self.pieces) - 1))]
         f = 0.0 if p.s_end_m - p.s_start_m <= _EPS else min(max((s - p.s_start_m) / (p.s_end_m - p.s_start_m), 0.0), 1.0)
-        centres = (1.0 - f) * np.asarray(p.offsets_start_m) + f * np.asarray(p.offsets_end_m)
-        return p.edge, int(np.argmin(np.abs(centres - d)))
+        return p, (1.0 - f) * np.asarray(p.offsets_start_m) + f * np.asarray(p.offsets_end_m)
 
 
 def _bounds(offsets, w) -> tuple[float, float]:
