@@ -50,7 +50,7 @@ def plain(scn) -> float:
 
 
 def neighbours() -> None:
-    from sumo_avoid.control.flocking import neighbour_pairs
+    from sumo_avoid.control.flock_terms import neighbour_pairs
 
     rng = np.random.default_rng(0)
     print("neighbour pairs within 80 m, density 100 per 250 m square (ms per call):")

@@ -6,7 +6,8 @@ one line below (docs/writing_a_controller.md).
 """
 from sumo_avoid.control.apf import ApfController, ApfParams
 from sumo_avoid.control.apf_sa import ApfSaController, ApfSaParams
-from sumo_avoid.control.flocking import FlockingController, FlockingParams
+from sumo_avoid.control.flock_terms import FlockingParams
+from sumo_avoid.control.flocking import FlockingController
 from sumo_avoid.control.formation import FormationController, FormationParams
 from sumo_avoid.control.ga_planner import GaPlannerController, GaPlannerParams
 from sumo_avoid.control.scripted import ScriptedController, ScriptedParams

@@ -194,7 +194,7 @@ class ApfController:
             side = np.sign(np.tile(sc.o_pos[:, 1], C) - np.repeat(q_cand[:, 1], O))
             lat_closing = np.maximum(v_rel[:, 1] * side, 0.0)
             beside = (e_lo - p.gov_margin_m > o_hi) | (e_hi + p.gov_margin_m < o_lo)
-            squeeze = ~beside & self._squeeze(sc, q_cand, oc, side, lat_closing)
+            squeeze = ~beside & self._squeeze(sc, q_cand, oc, (o_lo, o_hi), side, lat_closing)
             beside = beside | squeeze
             # its influence distance is the clearance kept beside a car plus the lateral stopping
             # distance of its closing speed: the ego's own speed (the headway term, for following)
@@ -226,7 +226,7 @@ class ApfController:
             U, F = U + Ur, F + Fr
         return Field(U, F, float(v_safe))
 
-    def _squeeze(self, sc: FrenetScene, q_cand, oc, side, lat_closing) -> np.ndarray:
+    def _squeeze(self, sc: FrenetScene, q_cand, oc, o_span, side, lat_closing) -> np.ndarray:
         """(C*O,) bool: the vehicle stands (or crawls) and does not close across the road, and the
         ego, taken as aligned with the road (like for the bounds: a heading turned away from the
         vehicle must not make its rear corner count), clears it with ``squeeze_clear_m`` by a small
@@ -239,7 +239,7 @@ class ApfController:
         p, C, O, L = self.p, len(q_cand), len(sc.o_pos), sc.length
         qs, qd = np.repeat(q_cand[:, 0], O), np.repeat(q_cand[:, 1], O)
         e_lo, e_hi = qd - 0.5 * sc.width, qd + 0.5 * sc.width
-        o_lo, o_hi = np.tile(oc[..., 1].min(1), C), np.tile(oc[..., 1].max(1), C)
+        o_lo, o_hi = o_span  # the vehicles' d spans, (C*O,) each, as field() has them
         shift = np.where(side > 0, e_hi - o_lo, o_hi - e_lo) + p.squeeze_clear_m
         lo, hi = sc.corridor(q_cand[:, 0])
         room = np.where(side > 0, e_lo - shift >= np.repeat(lo, O), e_hi + shift <= np.repeat(hi, O))

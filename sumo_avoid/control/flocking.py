@@ -36,15 +36,12 @@ from shapely.geometry import MultiPolygon, Polygon
 from shapely.geometry.polygon import orient
 
 from sumo_avoid.control.flock_road import RoadFlock
-from sumo_avoid.control.flock_terms import (  # noqa: F401  (the model's terms, re-exported)
-    PRESETS,
-    SPEED_RULES,
+from sumo_avoid.control.flock_terms import (
     FlockingParams,
     combine,
     friction,
     neighbour_pairs,
     polygon_shills,
-    preset,
     repulsion,
     segment_shills,
     shill,

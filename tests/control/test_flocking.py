@@ -9,9 +9,8 @@ import pytest
 
 from sumo_avoid.actuation.relaxation import relaxation_step
 from sumo_avoid.control import CONTROLLERS
-from sumo_avoid.control.flocking import (
+from sumo_avoid.control.flock_terms import (
     PRESETS,
-    FlockingController,
     FlockingParams,
     combine,
     friction,
@@ -22,6 +21,7 @@ from sumo_avoid.control.flocking import (
     segment_shills,
     shill,
 )
+from sumo_avoid.control.flocking import FlockingController
 from sumo_avoid.metrics.basic import braking_curve_D as D
 from sumo_avoid.rollout.arena import square
 

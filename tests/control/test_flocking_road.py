@@ -9,7 +9,7 @@ import pytest
 import sumo
 
 from sumo_avoid.control.flock_road import Carriageway, course_limits, safety_caps
-from sumo_avoid.control.flocking import preset
+from sumo_avoid.control.flock_terms import preset
 from sumo_avoid.core.geometry import footprint_corners
 from sumo_avoid.core.types import LanePiece
 from sumo_avoid.rollout import runner
