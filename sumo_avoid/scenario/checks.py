@@ -91,9 +91,13 @@ def check_goals(spec, net: pathlib.Path, file: str) -> None:
             except Exception as e:  # sumolib raises many kinds
                 raise ScenarioError(file, "sim.net", f"a readable SUMO network ({type(e).__name__})",
                                     spec.sim.net) from None
-            off = float(road.outside_distance([goal])[0])
+            x_lo, y_lo, x_hi, y_hi = road.area.bounds  # far off the net: no distance to compute (GEOS
+            # overflows to inf on coordinates like 1e308 and warns on the terminal)
+            far = not (x_lo - 1e3 <= goal[0] <= x_hi + 1e3 and y_lo - 1e3 <= goal[1] <= y_hi + 1e3)
+            off = math.inf if far else float(road.outside_distance([goal])[0])
             if not math.isfinite(off) or off > 0.5:
-                raise ScenarioError(file, key, f"a point on the network's drivable area ({off:.1f} m off it)",
+                where = "over 1 km outside the net's bounds" if far else f"{off:.1f} m off it"
+                raise ScenarioError(file, key, f"a point on the network's drivable area ({where})",
                                     list(goal))
 
 

@@ -80,6 +80,7 @@ CASES: dict[str, Case] = {
     "val_goal_three_numbers": scenario(base(ego="goal = [1.0, 2.0, 3.0]"), "ego.goal"),
     "val_goal_unknown_edge": scenario(base(ego='goal = "nowhere"'), "ego.goal"),
     "val_goal_off_net": scenario(base(ego="goal = [500.0, 300.0]"), "ego.goal"),
+    "val_goal_huge": scenario(base(ego="goal = [1e308, 1e308]"), "ego.goal"),  # GEOS warned on the terminal
     "val_goals_unknown_ego": scenario(base('[ego.goals]\nnobody = "road"'), "ego.goals.nobody"),
     "val_scripted_stop_unknown_ego": scenario(
         base('[controllers.scripted]\nstop_after_m = {nobody = 10.0}', ego='controller = "scripted"'),
