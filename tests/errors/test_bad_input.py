@@ -10,8 +10,10 @@ the real command in a process of its own.
 from __future__ import annotations
 
 import sqlite3
+import warnings
 
 import pytest
+from conftest import cli_in_process
 from corpus import NET, ROOT, ROUTES, Call, Case, base, check, scenario
 
 SCN = ROOT / "scenarios" / "overtaking.toml"
@@ -324,3 +326,14 @@ def _params():
 @pytest.mark.parametrize("name", list(_params()))
 def test_bad_input(name, tmp_path):
     check(CASES[name], tmp_path)
+
+
+def test_a_goal_far_off_the_net_is_one_line_without_a_warning(tmp_path):
+    """A Python warning would print on the terminal before our line (the corpus' in-process runs
+    do not see warnings: pytest collects them)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        res = cli_in_process("run", ROOT / "scenarios" / "left_turn.toml", "--set", "ego.goal=[1e308, 1e308]",
+                             "--out", tmp_path / "o")
+    assert res.returncode == 2 and "ego.goal" in res.stderr and res.stderr.count("\n") == 1
+    assert not (tmp_path / "o").exists()
