@@ -1,18 +1,22 @@
-"""How far the egos drove where they should not: against a lane's direction, and off the road.
+"""How far the egos drove where they should not: against a lane's direction, and off the road;
+and how far they backed up.
 
 Each ego's path is cut into its recorded steps: the segment from one row to the ego's next row,
-whose length (m) counts wholly when its midpoint qualifies, its direction being the direction of
-motion (so backing up in one's own lane is driving against it, whatever the heading).
+whose length (m) counts wholly when its midpoint qualifies, with the heading of its first row.
 
 * ``wrong_way_m``: the midpoint is inside a normal lane's polygon (nearest centre line of those
-  holding it) and outside every junction shape, and that lane's direction there is more than 90°
-  from the motion (:meth:`sumo_avoid.sumo.lanes.LaneIndex.against`). None in an arena (its roads
-  only give SUMO lanes to map the flock onto).
+  holding it) and outside every junction shape, and the car's **heading** is more than 90° from
+  that lane's direction there (:meth:`sumo_avoid.sumo.lanes.LaneIndex.against`): it faces the
+  lane's traffic (a ghost driver), whichever way it moves. None in an arena (its roads only give
+  SUMO lanes to map the flock onto). Documented choice: backing up in one's own lane faces the
+  lane's direction and is not wrong-way driving (it is ``reverse_m``); it used to count here,
+  which made an escape manoeuvre look like driving against traffic.
+* ``reverse_m``: the motion is more than 90° from the heading (backing up), anywhere.
 * ``off_road_m``: the midpoint is outside the drivable area (``Road.outside_distance`` > 0; lanes
   incl. internal ones and junction shapes), or in an arena outside its walls or inside an obstacle.
   φ_wall measures how far the footprint sticks out; this measures how long the centre was out.
 
-Both are summed over the egos (m), 0.0 when no ego ever moved.
+All three are summed over the egos (m), 0.0 when no ego ever moved.
 """
 from __future__ import annotations
 
@@ -26,9 +30,9 @@ from sumo_avoid.rollout.arena import outside_distance as arena_outside_distance
 from sumo_avoid.rollout.result import RunResult
 
 
-def ego_segments(traj: pd.DataFrame, egos: EgoRows | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Every ego's consecutive rows (by step) as segments: (K,2) midpoints and (K,2) displacements, m;
-    segments of zero length are left out."""
+def ego_segments(traj: pd.DataFrame, egos: EgoRows | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every ego's consecutive rows (by step) as segments: (K,2) midpoints, (K,2) displacements, m,
+    and (K,2) unit heading vectors of each segment's first row; segments of zero length are left out."""
     egos = EgoRows.of(traj) if egos is None else egos
     e = egos.table
     o = egos.by_id()
@@ -37,25 +41,28 @@ def ego_segments(traj: pd.DataFrame, egos: EgoRows | None = None) -> tuple[np.nd
     d = np.diff(p, axis=0)
     keep = (code[1:] == code[:-1]) & (np.hypot(d[:, 0], d[:, 1]) > 0)
     mid = 0.5 * (p[:-1] + p[1:])
-    return mid[keep], d[keep]
+    h = e["heading"].to_numpy(float)[o][:-1]
+    return mid[keep], d[keep], np.column_stack([np.cos(h), np.sin(h)])[keep]
 
 
 def road_use(run: RunResult) -> dict:
-    mid, d = ego_segments(run.traj, ego_rows(run))
+    mid, d, hd = ego_segments(run.traj, ego_rows(run))
     length = np.hypot(d[:, 0], d[:, 1])
+    reverse_m = float(length[np.einsum("ij,ij->i", hd, d) < 0].sum())
     scene = run.scene
     if scene.walls is None:
         out = run.road.outside_distance(mid) > 0
-        wrong = run.road.lanes.against(mid, d) if len(mid) else np.zeros(0, bool)
+        wrong = run.road.lanes.against(mid, hd) if len(mid) else np.zeros(0, bool)
         wrong_m = float(length[wrong].sum())
     else:
         out = arena_outside_distance(mid, scene.walls, scene.obstacles) > 0
         wrong_m = None
-    return {"wrong_way_m": wrong_m, "off_road_m": float(length[out].sum())}
+    return {"wrong_way_m": wrong_m, "off_road_m": float(length[out].sum()), "reverse_m": reverse_m}
 
 
 class RoadUse(Metric):
-    """wrong_way_m and off_road_m: metres the egos' centres drove against a lane or off the road."""
+    """wrong_way_m, off_road_m, reverse_m: metres the egos drove facing a lane's traffic, off the
+    road, and backwards."""
 
     def compute(self, run: RunResult) -> dict:
         return road_use(run)

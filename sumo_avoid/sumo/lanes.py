@@ -79,8 +79,9 @@ class LaneIndex:
         return lane, direction
 
     def against(self, points, motion) -> np.ndarray:
-        """(M,2) points and (M,2) directions of motion -> (M,) True where the point is in a normal lane,
-        outside every junction, and the lane's direction there is more than 90° from the motion."""
+        """(M,2) points and (M,2) directions (the ``wrong_way_m`` metric passes the car's heading)
+        -> (M,) True where the point is in a normal lane, outside every junction, and the lane's
+        direction there is more than 90° from the given direction."""
         pts = np.asarray(points, float).reshape(-1, 2)
         mv = np.asarray(motion, float).reshape(-1, 2)
         lane, direction = self.lane_at(pts)

@@ -1,4 +1,4 @@
-"""wrong_way_m and off_road_m (sumo_avoid.metrics.road_use) on hand-built recordings on the real
+"""wrong_way_m, off_road_m and reverse_m (sumo_avoid.metrics.road_use) on hand-built recordings on the real
 left_turn net, with hand-computed values, and on a real run checked against an independent count."""
 import math
 
@@ -31,7 +31,8 @@ def test_hand_built_recording_on_the_left_turn_net():
     up = np.arange(-120.0, -59.0)  # 60 segments of 1 m
     rows = (path("wrong", np.full(61, -1.75), up, north)  # northbound in C2S: 60 m against
             + path("right", np.full(61, 1.75), up, north)  # northbound in S2C: 0
-            + path("backing", np.full(61, 5.25), up[::-1], north)  # heading north, moving south in S2C: 60 m
+            + path("backing", np.full(61, 5.25), up[::-1], north)  # heading north, backing south in S2C: 60 m reversing, not against
+            + path("ghost_backing", np.full(61, -5.25), up, -north)  # heading south, backing north in C2S: 60 m reversing, not against
             + path("field", np.full(61, 30.0), up, north)  # 23 m east of the road: 60 m off road
             + path("junction", np.full(7, -1.75), np.arange(-3.0, 4.0), north)  # inside the junction: 0
             # eastwards (a little north) from x = 3 to 13 across S2C at y ~ -100: midpoints 3.5 .. 12.5,
@@ -41,28 +42,45 @@ def test_hand_built_recording_on_the_left_turn_net():
             + path("other", np.full(61, -1.75), up, north, ego=False))  # not an ego: not counted
     m = road_use(result(rows))
     out_len = 6 * math.hypot(1.0, 0.1)
-    assert m["wrong_way_m"] == pytest.approx(120.0)
+    assert m["wrong_way_m"] == pytest.approx(60.0)
     assert m["off_road_m"] == pytest.approx(60.0 + out_len)
+    assert m["reverse_m"] == pytest.approx(120.0)
+
+
+def test_a_car_facing_the_traffic_is_against_it_whichever_way_it_moves():
+    north = math.pi / 2
+    up = np.arange(-120.0, -89.0)  # 30 segments of 1 m
+    # heading north in the southbound C2S lane, backing south (with the lane's traffic)
+    m = road_use(result(path("facing", np.full(31, -1.75), up[::-1], north)))
+    assert m["wrong_way_m"] == pytest.approx(30.0)
+    assert m["reverse_m"] == pytest.approx(30.0)
 
 
 def test_no_ego_moved():
     rows = path("still", np.zeros(5), np.full(5, -100.0), 0.0)
-    assert road_use(result(rows)) == {"wrong_way_m": 0.0, "off_road_m": 0.0}
+    assert road_use(result(rows)) == {"wrong_way_m": 0.0, "off_road_m": 0.0, "reverse_m": 0.0}
 
 
-def test_real_run_a_blind_ego_turning_back_on_a_one_way_road():
-    """The scripted ego is told to drive west on the one-way (eastbound) overtaking road: it turns
-    round (leaving the road on the way) and comes back against the lanes. Checked against an
-    independent count: the road is the band 0 <= x <= 1500, -14 <= y <= 0 without junctions inside,
-    every lane runs east, so a segment is against a lane where it moves west with its midpoint in
-    that band, and off the road where the midpoint is outside it."""
+def test_real_run_a_blind_ego_backing_up_a_one_way_road():
+    """The scripted ego is told to drive west on the one-way (eastbound) overtaking road: it swings
+    its nose a little, stops, and backs up westwards (the actuator reverses towards a wish behind
+    it), out of the road at x = 0. Checked against an independent count: the road is the band
+    0 <= x <= 1500, -14 <= y <= 0 without junctions inside, every lane runs east, so a segment is
+    against a lane where the car faces west (cos heading < 0) with its midpoint in that band, backing
+    up where it moves against its heading, off the road where the midpoint is outside the band.
+    The recorded velocity of a backing ego points backwards (SUMO reports |v|; sim.read signs it)."""
     res, m = run_scenario("crash_straight", overrides=["controllers.scripted.direction_deg=180", "sim.duration_s=30"])
     e = res.traj[res.traj["is_ego"]].sort_values("step")
     p = e[["x", "y"]].to_numpy()
+    h = e["heading"].to_numpy()[:-1]
     d = np.diff(p, axis=0)
     mid = 0.5 * (p[1:] + p[:-1])
     length = np.hypot(d[:, 0], d[:, 1])
     inside = (mid[:, 0] > 0) & (mid[:, 0] < 1500) & (mid[:, 1] > -14.0) & (mid[:, 1] < 0.0)
-    assert m["wrong_way_m"] > 10.0 and m["off_road_m"] > 10.0
-    assert m["wrong_way_m"] == pytest.approx(length[inside & (d[:, 0] < 0)].sum(), abs=0.5)
+    backing = d[:, 0] * np.cos(h) + d[:, 1] * np.sin(h) < 0
+    assert m["reverse_m"] > 10.0 and m["off_road_m"] > 10.0
+    assert m["wrong_way_m"] == pytest.approx(length[inside & (np.cos(h) < 0)].sum(), abs=0.5)
+    assert m["reverse_m"] == pytest.approx(length[backing].sum(), abs=0.5)
     assert m["off_road_m"] == pytest.approx(length[~inside].sum(), abs=0.5)
+    moving_west = e[(e["x"].diff().shift(-1) < -0.1) & (e["x"] > 5.0)]  # (off the net SUMO says 0 m/s)
+    assert len(moving_west) > 50 and (moving_west["vx"] < 0).mean() > 0.9
