@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.metrics.egos import EgoRows
 from sumo_avoid.metrics.standard import ego_rows
@@ -56,6 +57,8 @@ def road_use(run: RunResult) -> dict:
 
 class RoadUse(Metric):
     """wrong_way_m and off_road_m: metres the egos' centres drove against a lane or off the road."""
+
+    keys = Keys(("wrong_way_m", "off_road_m"))
 
     def compute(self, run: RunResult) -> dict:
         return road_use(run)
