@@ -44,7 +44,7 @@ from sumo_avoid.core.geometry import (
     convex_distance,
     footprint_corners,
 )
-from sumo_avoid.core.types import EgoTask, Needs, Observation
+from sumo_avoid.core.types import EgoTask, Keys, Needs, Observation
 
 
 @dataclass(frozen=True)
@@ -119,6 +119,7 @@ class ApfController:
 
     needs = Needs(goals=True)
     metrics = ()  # metrics of its own beside the standard set
+    stats_keys = Keys()  # what stats() writes: nothing
 
     def __init__(self, params: ApfParams, ctx):
         self.p = params

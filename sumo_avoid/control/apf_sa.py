@@ -32,7 +32,7 @@ from sumo_avoid.control.apf import ApfController, ApfParams
 from sumo_avoid.control.road_view import FrenetScene, RoadView
 from sumo_avoid.core.config import FieldError, field_doc
 from sumo_avoid.core.geometry import footprint_corners
-from sumo_avoid.core.types import EgoTask, Observation
+from sumo_avoid.core.types import EgoTask, Keys, Observation
 
 
 @dataclass(frozen=True)
@@ -74,6 +74,7 @@ class _EgoState:
 
 class ApfSaController(ApfController):
     params_cls = ApfSaParams
+    stats_keys = Keys(("sa_escapes", "sa_failed_searches"))  # what stats() writes
 
     def __init__(self, params: ApfSaParams, ctx):
         super().__init__(params, ctx)

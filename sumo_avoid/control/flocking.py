@@ -53,7 +53,7 @@ from sumo_avoid.core.geometry import (
     pad_polygons,
     ring_walls,
 )
-from sumo_avoid.core.types import EgoTask, Needs, Observation
+from sumo_avoid.core.types import EgoTask, Keys, Needs, Observation
 from sumo_avoid.sensing.perception import radar_obstacles
 from sumo_avoid.sensing.v2v import V2VParams
 
@@ -64,6 +64,7 @@ class FlockingController:
 
     needs = Needs(goals=False, v2v=True)  # a flock has no goal; members' states come over V2V
     metrics = ("flocking",)  # order parameters and fitness (sumo_avoid.metrics.flocking)
+    stats_keys = Keys(("flocking_updates",))  # what stats() writes
 
     def __init__(self, params: FlockingParams, ctx=None):
         self.p = params

@@ -59,7 +59,7 @@ from sumo_avoid.core.geometry import (
     pad_polygons,
     wrap_angle,
 )
-from sumo_avoid.core.types import EgoTask, Needs, Observation
+from sumo_avoid.core.types import EgoTask, Keys, Needs, Observation
 from sumo_avoid.sensing.perception import radar_obstacles
 from sumo_avoid.sensing.v2v import V2VParams
 
@@ -151,6 +151,7 @@ class FormationController:
 
     needs = Needs(goals=True, v2v=True)
     metrics = ("formation",)  # S_ef and its terms, kappa shares (sumo_avoid.metrics.formation)
+    stats_keys = Keys(("formation_min_gamma",), nested=("formation_kappa_steps", "formation_mode_log"))  # stats()
 
     def __init__(self, params: FormationParams, ctx):
         self.p = params

@@ -31,10 +31,8 @@ the command.
 
 Each plan is logged (``plans.csv``: time, trigger, generations, generation of the first usable
 path, clearance, length, plan time, best fitness per generation, the path) with the map points
-(``radar_map.csv``). Counters in metrics.json: ``plans``, ``replans``, ``generations_to_usable``
-(mean over the plans that found a usable path), ``generations_to_usable_max``,
-``plans_usable_within_20`` (share of plans with a usable path by generation 20, the seed's
-figure), ``plans_never_usable``. Plan times go to timings.json only (not deterministic).
+(``radar_map.csv``). Counters in metrics.json: ``stats_keys`` (``generations_to_usable``: mean over plans with a usable
+path; ``plans_usable_within_20``: share of plans usable by generation 20). Plan times: timings.json only (not deterministic).
 """
 from __future__ import annotations
 
@@ -47,7 +45,7 @@ import pandas as pd
 from sumo_avoid.control.road_view import FrenetScene, RoadView
 from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.polyline import arc_lengths, polyline_project
-from sumo_avoid.core.types import EgoTask, Needs, Observation
+from sumo_avoid.core.types import EgoTask, Keys, Needs, Observation
 from sumo_avoid.planning import kernels
 from sumo_avoid.planning.ga import GaParams, clearance, plan, resample
 from sumo_avoid.planning.pursuit import (
@@ -194,6 +192,8 @@ def rest_of(path, s_m: float, pos) -> np.ndarray:
 class GaPlannerController:
     needs = Needs(goals=True)
     metrics = ()
+    stats_keys = Keys(("plans", "replans", "generations_to_usable", "generations_to_usable_max",  # stats()
+                       "plans_usable_within_20", "plans_never_usable", "planner_reversals"))
 
     def __init__(self, params: GaPlannerParams, ctx):
         self.p = params

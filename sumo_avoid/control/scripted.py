@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sumo_avoid.core.config import field_doc
-from sumo_avoid.core.types import EgoTask, Needs, Observation
+from sumo_avoid.core.types import EgoTask, Keys, Needs, Observation
 
 
 @dataclass(frozen=True)
@@ -34,6 +34,7 @@ class ScriptedController:
 
     needs = Needs(goals=True)
     metrics = ()  # metrics of its own beside the standard set
+    stats_keys = Keys()  # what stats() writes: nothing
 
     def __init__(self, params: ScriptedParams, ctx=None):
         self.p = params

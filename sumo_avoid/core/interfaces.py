@@ -18,7 +18,7 @@ from typing import Any, ClassVar, Protocol
 import numpy as np
 
 from sumo_avoid.core.snapshot import Snapshot
-from sumo_avoid.core.types import EgoTask, Motion, Needs, Observation
+from sumo_avoid.core.types import EgoTask, Keys, Motion, Needs, Observation
 
 
 @dataclass(frozen=True)
@@ -42,8 +42,8 @@ class EgoAware(Protocol):
 
     def remove_ego(self, vid: str) -> None: ...
 
-    def stats(self) -> dict:  # counters for metrics.json
-        ...
+    def stats(self) -> dict:  # counters for metrics.json: a controller's or layer's those its stats_keys declare,
+        ...  # a sensor's or actuator's none ({})
 
 
 class Sensor(EgoAware, Protocol):
@@ -58,6 +58,7 @@ class Controller(EgoAware, Protocol):
 
     needs: ClassVar[Needs]
     metrics: ClassVar[tuple[str, ...]]  # names in sumo_avoid.metrics.METRICS computed beside the standard set
+    stats_keys: ClassVar[Keys]  # the keys stats() writes (sumo_avoid.rollout.assemble.metric_keys)
 
     def act(self, obs: Observation) -> np.ndarray:  # (E, 2) desired velocity, m/s
         ...
@@ -70,6 +71,7 @@ class Layer(EgoAware, Protocol):
     """Between controller and actuator: limits (or only watches) the command."""
 
     needs_scans: ClassVar[bool]  # wants Observation.scans (a radar on board) even with ground truth
+    stats_keys: ClassVar[Keys]  # the keys stats() writes
 
     def filter(self, obs: Observation, command: np.ndarray) -> np.ndarray: ...
 

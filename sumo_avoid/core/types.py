@@ -144,3 +144,26 @@ class Needs:
 
     goals: bool = True  # egos are retired at their goal (a flock has none)
     v2v: bool = False  # flock members' states over V2V (Observation.v2v)
+
+
+@dataclass(frozen=True)
+class Keys:
+    """Top-level ``metrics.json`` keys a plug-in writes, declared as data (a metric's ``keys``, a
+    controller's or layer's ``stats_keys``), so that names a user gives (suite criteria) are checked
+    before anything runs. ``numeric``: a number, true/false or null per run; ``text``: a string per
+    run (both ledger columns); ``nested``: lists and objects, kept only in ``metrics.json``.
+    tests/metrics/test_metric_keys.py compares the declarations with what real runs write."""
+
+    numeric: tuple[str, ...] = ()
+    nested: tuple[str, ...] = ()
+    text: tuple[str, ...] = ()
+
+    def __or__(self, other: Keys) -> Keys:
+        """Both sets; a key both declare takes ``other``'s kind (a later metric wins a shared key)."""
+        kind = {k: i for keys in (self, other) for i, group in enumerate((keys.numeric, keys.nested, keys.text))
+                for k in group}
+        return Keys(*(tuple(k for k, i in kind.items() if i == n) for n in range(3)))
+
+    @property
+    def names(self) -> frozenset[str]:
+        return frozenset(self.numeric + self.nested + self.text)

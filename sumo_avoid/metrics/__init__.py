@@ -1,6 +1,7 @@
 """Metrics of a finished run, by name (``output.metrics``; default: :data:`STANDARD` plus the
 controller's own). Each is a :class:`~sumo_avoid.metrics.base.Metric`; later ones win on a shared key."""
 from sumo_avoid.core.registry import Registry
+from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import clean
 from sumo_avoid.metrics.comfort import Comfort
 from sumo_avoid.metrics.flocking import FlockingOrder
@@ -46,3 +47,11 @@ def compute(run, names=STANDARD) -> dict:
     for name in names:
         out.update(METRICS[name].factory().compute(run))
     return clean(out)
+
+
+def declared_keys(names, scn, stats: Keys) -> Keys:
+    """The keys the named metrics declare for a run of ``scn`` whose plug-ins' counters are ``stats``."""
+    out = Keys()
+    for name in names:
+        out = out | METRICS[name].factory.keys_for(scn, stats)
+    return out

@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.metrics.egos import EgoRows
 from sumo_avoid.metrics.standard import ego_rows
@@ -73,6 +74,8 @@ def comfort(traj: pd.DataFrame, egos: EgoRows | None = None) -> dict:
 
 class Comfort(Metric):
     """Largest longitudinal jerk and lateral acceleration of any ego (per ego, max over egos)."""
+
+    keys = Keys(("max_abs_jerk_mps3", "max_lat_accel_mps2"))
 
     def compute(self, run: RunResult) -> dict:
         return comfort(run.traj, ego_rows(run))

@@ -27,6 +27,7 @@ import numpy as np
 from sumo_avoid.control import formation_field as ff
 from sumo_avoid.control.formation import member_order
 from sumo_avoid.core.geometry import convex_overlap, footprint_corners, pad_polygons
+from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.rollout.result import RunResult
 
@@ -113,7 +114,11 @@ def obstacle_hits(times, tr, polys) -> int:
 
 
 class FormationScore(Metric):
-    """S_ef = I_t + I_e + I_d (SPEC §3), kappa time shares, obstacle contacts."""
+    """S_ef = I_t + I_e + I_d (SPEC §3), kappa time shares, obstacle contacts (none of them when no
+    member has a goal)."""
+
+    keys = Keys(("s_ef", "i_t", "i_e", "i_d", "formation_time_s", "t_ref_s", "obstacle_hits", "kappa1_share",
+                 "kappa2_share", "kappa3_share"))
 
     def compute(self, run: RunResult) -> dict:
         spec = run.scenario.spec

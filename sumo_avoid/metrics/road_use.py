@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.metrics.egos import EgoRows
 from sumo_avoid.metrics.standard import ego_rows
@@ -63,6 +64,8 @@ def road_use(run: RunResult) -> dict:
 class RoadUse(Metric):
     """wrong_way_m, off_road_m, reverse_m: metres the egos drove facing a lane's traffic, off the
     road, and backwards."""
+
+    keys = Keys(("wrong_way_m", "off_road_m"))
 
     def compute(self, run: RunResult) -> dict:
         return road_use(run)

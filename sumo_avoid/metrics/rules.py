@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from sumo_avoid.core.polyline import polyline_track
+from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.rollout.result import RunResult
 from sumo_avoid.safety.rules import RED, STOP_SIGNS
@@ -142,6 +143,11 @@ def stop_crossings(run: RunResult) -> list[dict]:
 
 
 class RuleViolations(Metric):
+    """Red lights, yields and stop signs the egos ran, with every crossing judged."""
+
+    keys = Keys(("red_light_violations", "yield_violations", "stop_sign_violations"),
+                nested=("signal_crossings", "yield_crossings", "stop_crossings"))
+
     def compute(self, run: RunResult) -> dict:
         crossings = signal_crossings(run)
         yielding = yield_crossings(run)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.rollout.result import RunResult
 
@@ -39,6 +40,8 @@ def ssm_summary(conflicts, params) -> dict:
 
 class SurrogateSafety(Metric):
     """min_ttc_s, max_drac_mps2, min_pet_s (clamped at the device's thresholds), ssm_conflicts."""
+
+    keys = Keys(("min_ttc_s", "max_drac_mps2", "min_pet_s", "ssm_conflicts"))
 
     def compute(self, run: RunResult) -> dict:
         return ssm_summary(run.tables.get("ssm_conflicts"), run.ssm)

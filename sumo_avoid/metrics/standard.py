@@ -6,6 +6,7 @@ import numpy as np
 
 from sumo_avoid import __version__
 from sumo_avoid.core.geometry import footprint_corners
+from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics import basic
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.metrics.egos import EgoRows
@@ -55,6 +56,9 @@ def outside_distance(run: RunResult) -> np.ndarray:
 class RunInfo(Metric):
     """What ran: scenario, controller, sensor, layer, seed, step, simulated time, version."""
 
+    keys = Keys(("seed", "step_s", "sim_time_s", "steps"),
+                text=("scenario", "controller", "sensor", "safety", "sumo_avoid_version"))
+
     def compute(self, run: RunResult) -> dict:
         spec = run.scenario.spec
         return {"scenario": spec.name, "controller": spec.ego.controller, "sensor": spec.ego.sensor,
@@ -64,6 +68,10 @@ class RunInfo(Metric):
 
 class Collisions(Metric):
     """Footprint contact events found by the plug-in, SUMO's own reports, and where they disagree."""
+
+    keys = Keys(("collisions", "sumo_collisions"),
+                nested=("collision_events", "sumo_collision_events", "collision_pairs_only_ours",
+                        "collision_pairs_only_sumo", "collision_disagreements"))
 
     def compute(self, run: RunResult) -> dict:
         events = run.memo("collision_events", lambda: basic.collision_events(run.traj, rows=pair_rows(run)))
@@ -119,12 +127,16 @@ def disagreements(traj, events, sumo, only_ours, only_sumo) -> list[dict]:
 class MinGap(Metric):
     """Smallest footprint-to-footprint distance between an ego and any other vehicle, m."""
 
+    keys = Keys(("min_gap_m",))
+
     def compute(self, run: RunResult) -> dict:
         return {"min_gap_m": basic.min_gap_m(run.traj, rows=pair_rows(run))}
 
 
 class PhiColl(Metric):
     """SPEC §1.1 collision risk (centre distance < 3 m), averaged over time."""
+
+    keys = Keys(("phi_coll",))
 
     def compute(self, run: RunResult) -> dict:
         return {"phi_coll": phi_coll(run)}
@@ -133,6 +145,8 @@ class PhiColl(Metric):
 class PhiWall(Metric):
     """SPEC §1.1: mean distance the egos stick out of the allowed area (road or arena), m."""
 
+    keys = Keys(("phi_wall",))
+
     def compute(self, run: RunResult) -> dict:
         return {"phi_wall": phi_wall(run)}
 
@@ -140,12 +154,20 @@ class PhiWall(Metric):
 class PluginStats(Metric):
     """The plug-ins' own counters (SA escapes, danger-time interventions, flocking updates)."""
 
+    keys = Keys()  # those of the run's plug-ins:
+
+    @classmethod
+    def keys_for(cls, scn, stats: Keys) -> Keys:
+        return stats
+
     def compute(self, run: RunResult) -> dict:
         return dict(run.stats)
 
 
 class Motion(Metric):
     """Goal reached, time to goal, path length, mean speed, per ego."""
+
+    keys = Keys(("goal_reached", "time_to_goal_s", "path_length_m", "mean_speed_mps"), nested=("per_ego",))
 
     def compute(self, run: RunResult) -> dict:
         return basic.motion_summary(run.traj, run.goals, run.scenario.spec.ego.goal_tolerance_m, ego_rows(run))

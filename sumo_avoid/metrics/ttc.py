@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.metrics.pairs import Rows
 from sumo_avoid.metrics.standard import pair_rows
@@ -97,6 +98,8 @@ def min_ttc2d_s(traj, rows: Rows | None = None, params: TTC2D = TTC2D()) -> floa
 
 class MinTTC2D(Metric):
     """min_ttc2d_s: the smallest constant-velocity 2-D time to footprint contact of an ego, s."""
+
+    keys = Keys(("min_ttc2d_s",))
 
     def compute(self, run: RunResult) -> dict:
         return {"min_ttc2d_s": min_ttc2d_s(run.traj, pair_rows(run))}

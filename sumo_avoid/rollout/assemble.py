@@ -19,8 +19,9 @@ from dataclasses import dataclass
 from sumo_avoid.actuation import ACTUATORS
 from sumo_avoid.control import CONTROLLERS
 from sumo_avoid.core.interfaces import Actuator, Context, Controller, Layer, Sensor
-from sumo_avoid.core.types import EgoTask
-from sumo_avoid.metrics import STANDARD
+from sumo_avoid.core.registry import Entry
+from sumo_avoid.core.types import EgoTask, Keys
+from sumo_avoid.metrics import STANDARD, declared_keys
 from sumo_avoid.safety import LAYERS, RULES
 from sumo_avoid.sensing import SENSORS
 
@@ -60,15 +61,21 @@ def controller_for(scn, ctx: Context) -> Controller:
     return entry.factory(scn.params, ctx)
 
 
+def layer_plan(spec) -> tuple[tuple[Entry, object, dict], ...]:
+    """The layers of a run, in order: (registry entry, its parameters, keyword arguments)."""
+    plan = []
+    if spec.ego.rules != "none":
+        plan.append((RULES[spec.ego.rules], spec.rules, {}))
+    if spec.ego.safety != "none":
+        plan.append((LAYERS[spec.ego.safety], spec.safety, {"enforce": True}))
+    elif spec.ego.sensor == "radar":
+        plan.append((LAYERS["danger_time"], spec.safety, {"enforce": False}))
+    return tuple(plan)
+
+
 def assemble(scn, ctx: Context, controller: Controller) -> Stack:
     spec = scn.spec
-    layers = []
-    if spec.ego.rules != "none":
-        layers.append(RULES[spec.ego.rules].factory(spec.rules, ctx))
-    if spec.ego.safety != "none":
-        layers.append(LAYERS[spec.ego.safety].factory(spec.safety, ctx, enforce=True))
-    elif spec.ego.sensor == "radar":
-        layers.append(LAYERS["danger_time"].factory(spec.safety, ctx, enforce=False))
+    layers = [entry.factory(params, ctx, **kw) for entry, params, kw in layer_plan(spec)]
     needs_scans = any(type(layer).needs_scans for layer in layers)
     sensor = SENSORS[spec.ego.sensor].factory(spec.radar, ctx, needs_scans=needs_scans,
                                               v2v=controller.v2v_params() if type(controller).needs.v2v else None)
@@ -81,3 +88,13 @@ def metric_names(scn) -> tuple[str, ...]:
     (``metrics``), then what the scenario adds (``output.metrics``); each once, in that order."""
     names = STANDARD + CONTROLLERS[scn.spec.ego.controller].factory.metrics + scn.spec.output.metrics
     return tuple(dict.fromkeys(names))
+
+
+def metric_keys(scn) -> Keys:
+    """Every key a run of ``scn`` can write to ``metrics.json``, from the declarations alone (nothing
+    runs): the keys of its metrics (:func:`metric_names`), the plug-ins' counters among them (the
+    ``stats_keys`` of its controller and layers; sensors and actuators write none)."""
+    stats = Keys()
+    for cls in (CONTROLLERS[scn.spec.ego.controller].factory, *(e.factory for e, _, _ in layer_plan(scn.spec))):
+        stats = stats | cls.stats_keys
+    return declared_keys(metric_names(scn), scn, stats)

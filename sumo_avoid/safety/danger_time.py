@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sumo_avoid.core.config import field_doc
+from sumo_avoid.core.types import Keys
 
 NONE, WARNING, REDUCE, BRAKE = 0, 1, 2, 3
 
@@ -96,6 +97,7 @@ class DangerTimeLayer:
     unchanged)."""
 
     needs_scans = True
+    stats_keys = Keys(("radar_warnings", "radar_reductions", "radar_brakes", "min_danger_time_s"))  # stats()
 
     def __init__(self, params: DangerTimeParams, ctx=None, *, enforce: bool = True):
         self.p = params

@@ -47,7 +47,7 @@ import numpy as np
 
 from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.polyline import polyline_track
-from sumo_avoid.core.types import EgoTask
+from sumo_avoid.core.types import EgoTask, Keys
 from sumo_avoid.safety.yielding import (
     critical_gap_s,
     ego_time_to_line,
@@ -123,6 +123,7 @@ class TrafficRulesLayer:
     """Traffic rules: stop for red and stoppable yellow lights, keep the road's speed ahead."""
 
     needs_scans = False
+    stats_keys = Keys(("rules_signal_stops", "rules_speed_caps", "rules_yields"))  # what stats() writes
 
     def __init__(self, params: RulesParams, ctx=None):
         self.p = params

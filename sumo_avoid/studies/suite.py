@@ -8,13 +8,16 @@ A suite file has ``[[entry]]`` tables: ``name``, ``scenario`` (path relative to 
     METRIC_rate OP VALUE     # share of seeds where the (true/false) metric is true: goal_reached_rate >= 0.9
     METRIC_mean|_min|_max OP VALUE   # aggregate over seeds: min_gap_m_min >= 0.5
 
-OP is one of ``== != <= >= < >``; VALUE a number or ``true``/``false``. A missing metric, a metric
-without a value (n/a) and a failed run all fail the entry. ``[defaults]`` may give ``seeds`` and
-``set`` for every entry.
+OP is one of ``== != <= >= < >``; VALUE a number or ``true``/``false``. METRIC must be a key with
+one value per run that a run of the entry writes (:func:`sumo_avoid.rollout.assemble.metric_keys`,
+from the metrics' and plug-ins' declarations), checked before any run starts; a metric without a
+value (n/a) and a failed run fail the entry. ``[defaults]`` may give ``seeds`` and ``set`` for
+every entry.
 """
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 import operator
 import os
@@ -23,7 +26,10 @@ import re
 import tempfile
 import xml.etree.ElementTree as ET
 
-from sumo_avoid.core.config import ScenarioError, build
+from sumo_avoid.core.config import ScenarioError, ScenarioErrors, build
+from sumo_avoid.core.types import Keys
+from sumo_avoid.rollout.assemble import metric_keys
+from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.spec import read_toml
 from sumo_avoid.studies import batch, ledger
 from sumo_avoid.studies.batch import parse_seeds
@@ -43,7 +49,7 @@ class Criterion:
     value: float
 
     @classmethod
-    def parse(cls, text: str, file: str = "<criteria>", key: str = "criteria") -> "Criterion":
+    def parse(cls, text: str, file: str = "<criteria>", key: str = "criteria") -> Criterion:
         m = _CRIT.match(text) if isinstance(text, str) else None
         if not m:
             raise ScenarioError(file, key, "a criterion like 'collisions == 0' or 'goal_reached_rate >= 0.9' "
@@ -52,17 +58,34 @@ class Criterion:
         value = {"true": 1.0, "false": 0.0}.get(raw)
         return cls(text.strip(), m.group(1), m.group(2), float(raw) if value is None else value)
 
+    def resolve(self, names) -> tuple[str, str | None] | None:
+        """(metric key, aggregate or None) this criterion reads among ``names``; None if it names none."""
+        if self.metric in names:
+            return self.metric, None
+        base, _, suffix = self.metric.rpartition("_")
+        return (base, suffix) if suffix in AGGREGATES and base in names else None
+
+    def problem(self, keys: Keys) -> str | None:
+        """What is wrong with the metric name given what a run writes (``keys``), or None."""
+        if self.resolve(keys.numeric):
+            return None
+        aggregate = self.metric.rpartition("_")[2] in AGGREGATES
+        forms = [f"{k}_{a}" for k in keys.numeric for a in AGGREGATES] if aggregate else keys.numeric
+        hint = f"nearest: {', '.join(difflib.get_close_matches(self.metric, forms, n=3, cutoff=0.0))}"
+        other = self.resolve(keys.nested) or self.resolve(keys.text)
+        if other:
+            what = "a list or table, kept only in metrics.json" if other[0] in keys.nested else "text"
+            return f"a metric with a number or true/false per run ('{other[0]}' is {what}; {hint})"
+        return f"a metric a run of this entry writes, optionally with _{'/_'.join(AGGREGATES)} ({hint})"
+
     def check(self, rows: list[dict]) -> tuple[bool, str]:
         """Evaluate on the done runs' metric rows. Returns (passed, one-line observation)."""
         if not rows:
             return False, "no finished runs"
-        name, agg = self.metric, None
-        if name not in rows[0]:
-            base, _, suffix = name.rpartition("_")
-            if suffix in AGGREGATES and base in rows[0]:
-                name, agg = base, suffix
-            else:
-                return False, f"no metric '{self.metric}'"
+        found = self.resolve(rows[0])
+        if found is None:
+            return False, f"no metric '{self.metric}'"
+        name, agg = found
         vals = [_num(r.get(name)) for r in rows]
         seeds = [r.get("seed") for r in rows]
         op = OPS[self.op]
@@ -121,6 +144,23 @@ def load(path, seeds_override=None, extra_sets=()) -> list[Entry]:
             raise ScenarioError(file, f"{where}.scenario", "an existing scenario file", e.scenario)
         out.append(Entry(e.name, scn, e.controller, seeds, sets, parsed))
     return out
+
+
+def check_criteria(entries: list[Entry], file: str) -> None:
+    """Every criterion names a metric with one value per run that a run of its entry writes (the
+    declared keys of the entry's scenario, controller and overrides), before anything runs; raises
+    ScenarioError (ScenarioErrors: one line per bad criterion)."""
+    errors = []
+    for i, e in enumerate(entries):
+        keys = metric_keys(scenario.load(e.scenario, list(e.overrides), controller=e.controller, seed=e.seeds[0]))
+        for j, c in enumerate(e.criteria):
+            problem = c.problem(keys)
+            if problem:
+                errors.append(ScenarioError(file, f"entry[{i}].criteria[{j}]", problem, c.metric))
+    if len(errors) == 1:
+        raise errors[0]
+    if errors:
+        raise ScenarioErrors(errors)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -216,6 +256,7 @@ def cmd_suite(args) -> int:
             if s.key not in seen:
                 seen.add(s.key)
                 all_runs.append(s)
+    check_criteria(entries, str(args.suite))
     with tempfile.TemporaryDirectory(prefix="sumo-avoid-suite-") as tmp:
         led = args.ledger or pathlib.Path(tmp) / "ledger.sqlite"
         cfg = batch.BatchConfig(tuple(all_runs), led, workers=args.workers or os.cpu_count() or 1,

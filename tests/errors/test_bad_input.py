@@ -219,12 +219,12 @@ def _batch_file(text, key, files=None, argv=()) -> Case:
     return Case("batch-file", make)
 
 
-def _suite_file(text, key, argv=()) -> Case:
+def _suite_file(text, key, argv=(), names=()) -> Case:
     def make(tmp):
         p = tmp / "s.suite.toml"
         p.write_text(text.replace("{scn}", str(SCN)))
         return Call(["suite", p, *[a.replace("{tmp}", str(tmp)) for a in argv]],
-                    (str(p) if key.startswith(("entry", "<", "defaults")) else "", key), cwd=tmp)
+                    (str(p) if key.startswith(("entry", "<", "defaults")) else "", key, *names), cwd=tmp)
     return Case("suite", make)
 
 
@@ -248,7 +248,17 @@ CASES.update({
     "suite_criterion_syntax": _suite_file(SUITE.replace("collisions == 0", "collisions is zero"),
                                           "entry[0].criteria[0]"),
     "suite_criterion_unknown_metric": _suite_file(SUITE.replace("collisions == 0", "happiness >= 1"),
-                                                  "entry[0].criteria[0]"),
+                                                  "entry[0].criteria[0]", names=("'happiness'", "nearest: ")),
+    "suite_criterion_typo": _suite_file(SUITE.replace("collisions == 0", "min_gap_mm_min >= 0.5"),
+                                        "entry[0].criteria[0]", names=("nearest: min_gap_m_min",)),
+    "suite_criterion_nested_metric": _suite_file(SUITE.replace("collisions == 0", "collision_events == 0"),
+                                                 "entry[0].criteria[0]", names=("'collision_events' is a list",)),
+    "suite_criterion_text_metric": _suite_file(SUITE.replace("collisions == 0", "controller == 1"),
+                                               "entry[0].criteria[0]", names=("'controller' is text",)),
+    "suite_criterion_other_controllers_metric": _suite_file(  # APF-SA's counter, the entry drives plain APF
+        SUITE.replace("collisions == 0", "sa_escapes_max <= 2") + 'controller = "apf"\n', "entry[0].criteria[0]"),
+    "suite_criterion_second_entry": _suite_file(SUITE + SUITE.replace('"a"', '"b"').replace("collisions == 0", "mu >= 0"),
+                                                "entry[1].criteria[0]"),
     "suite_duplicate_names": _suite_file(SUITE + SUITE, "entry[1].name"),
     "suite_no_seeds": _suite_file(SUITE.replace('seeds = "1"\n', ""), "entry[0].seeds"),
     "suite_seeds_flag": _suite_file(SUITE, "--seeds", argv=("--seeds", "x")),
@@ -311,10 +321,7 @@ CASES.update({
 })
 
 # cases that fail today, with the cause (strict: a case that starts passing must leave this list)
-XFAIL: dict[str, str] = {
-    "suite_criterion_unknown_metric": "metric names are known only once a run has finished: the metrics do not "
-                                      "declare their keys, so an unknown one is reported after the runs (exit 1)",
-}
+XFAIL: dict[str, str] = {}
 
 
 def _params():

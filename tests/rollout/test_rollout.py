@@ -13,7 +13,7 @@ from sumo_avoid.actuation.params import ActuatorConfig
 from sumo_avoid.control import CONTROLLERS
 from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.snapshot import Snapshot
-from sumo_avoid.core.types import Needs
+from sumo_avoid.core.types import Keys, Needs
 from sumo_avoid.rollout.assemble import Stack
 from sumo_avoid.rollout.egos import EgoBook
 from sumo_avoid.rollout.loop import rollout
@@ -34,6 +34,7 @@ class ToyController:
 
     needs = Needs(goals=True)
     metrics = ()
+    stats_keys = Keys(("toy_steps",))
 
     def __init__(self, params: ToyParams, ctx=None):
         self.p = params
@@ -62,6 +63,7 @@ class HalfSpeedLayer:
     """Halves every command (and counts)."""
 
     needs_scans = False
+    stats_keys = Keys(("half_calls",))
 
     def __init__(self, params=None, ctx=None, *, enforce=True):
         self.calls = 0
@@ -169,6 +171,7 @@ def toy_registered():
 def test_a_toy_controller_and_layer_from_a_test_module_run_on_real_sumo(toy_registered):
     from sumo_avoid.outputs import run_metrics
     from sumo_avoid.rollout import runner
+    from sumo_avoid.rollout.assemble import metric_keys
     from sumo_avoid.scenario import spec as scenario
 
     scn = scenario.load(SCENARIOS / "overtaking.toml", ["sim.duration_s=20", "ego.safety=\"half_speed\"",
@@ -177,6 +180,7 @@ def test_a_toy_controller_and_layer_from_a_test_module_run_on_real_sumo(toy_regi
     m = run_metrics(res)
     ego = res.traj[res.traj["is_ego"]]
     assert m["controller"] == "toy" and m["toy_steps"] == m["half_calls"] > 150
+    assert set(m) == metric_keys(scn).names  # the user's plug-ins declare their counters like the package's
     # the layer halves 12 m/s: the ego settles at 6 m/s along the road
     assert ego["speed"].iloc[-20:].mean() == pytest.approx(6.0, abs=0.05)
     assert math.isclose(m["collisions"], 0)

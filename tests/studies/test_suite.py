@@ -105,6 +105,29 @@ def test_project_suite_file_is_valid():
     assert len(entries) >= 2 and all(e.criteria for e in entries)
 
 
+@pytest.mark.parametrize("name", ["suite", "roads", "generated"])
+def test_project_suites_name_only_metrics_their_runs_write(name):
+    from sumo_avoid.studies import suite
+
+    path = ROOT / "scenarios" / f"{name}.toml"
+    suite.check_criteria(suite.load(path), str(path))  # raises on a criterion no run of its entry could meet
+
+
+def test_criteria_are_checked_against_each_entrys_own_runs(tmp_path):
+    """The flocking metric's mu exists only where the entry adds that metric (output.metrics); the
+    check names the entry and the criterion, before anything runs."""
+    from sumo_avoid.studies import suite
+
+    path = tmp_path / "s.toml"
+    entry = (f'[[entry]]\nname = "{{n}}"\nscenario = "{OVERTAKING}"\nseeds = "1"\ncriteria = ["mu_mean >= 0"]\n'
+             'set = [{set}]\n')
+    path.write_text(entry.format(n="with", set="'output.metrics=[\"flocking\"]'") + entry.format(n="without", set=""))
+    with pytest.raises(ScenarioError) as e:
+        suite.check_criteria(suite.load(path), str(path))
+    assert e.value.key == "entry[1].criteria[0]" and e.value.got == "mu_mean"  # entry[0] passed
+    assert "a run of this entry writes" in str(e.value) and "nearest: " in str(e.value)
+
+
 def test_project_suite_quick_version_passes(tmp_path, capsys):
     """CI's quick run of scenarios/suite.toml: one seed per entry, full-length runs."""
     junit = tmp_path / "suite.xml"
