@@ -65,7 +65,7 @@ class RoadUse(Metric):
     """wrong_way_m, off_road_m, reverse_m: metres the egos drove facing a lane's traffic, off the
     road, and backwards."""
 
-    keys = Keys(("wrong_way_m", "off_road_m"))
+    keys = Keys(("wrong_way_m", "off_road_m", "reverse_m"))
 
     def compute(self, run: RunResult) -> dict:
         return road_use(run)
