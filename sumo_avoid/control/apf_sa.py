@@ -51,8 +51,12 @@ class ApfSaParams(ApfParams):
                                                   "with oncoming traffic, 24 fruitless searches took 3/4 of a run's "
                                                   "CPU time)")
     escape_hold_s: float = field_doc(3.0, doc="keep the escape offset this long once reached, s")
-    escape_timeout_s: float = field_doc(10.0, doc="give up an escape after this long, s")
-    escape_room_m: float = field_doc(12.0, doc="when blocked, back up until this much room is free ahead, m")
+    escape_timeout_s: float = field_doc(10.0, doc="give up an escape after this long without getting "
+                                                  "escape_progress_m closer to its offset or backing up, s")
+    escape_progress_m: float = field_doc(0.5, doc="lateral progress towards the offset that restarts the timeout, m")
+    escape_max_s: float = field_doc(40.0, doc="give up an escape after this long in any case, s")
+    escape_room_m: float = field_doc(12.0, doc="when blocked, back up until this much room (at least the "
+                                               "carrot distance, lookahead_min_m) is free ahead along the route, m")
     escape_reverse_speed_mps: float = field_doc(1.5, doc="speed while backing up, m/s")
     escape_margin_m: float = field_doc(0.5, doc="the escape target keeps the car this far from road edges, m")
 
@@ -66,6 +70,8 @@ class _EgoState:
     history: deque  # (time_s, arc length s_m)
     escape_offset: float | None = None
     escape_start_s: float = 0.0
+    escape_clock_s: float = 0.0  # when the escape last got closer to its offset (or was backing up)
+    escape_err_m: float = math.inf  # the smallest |d - offset| so far
     held_since_s: float | None = None
     cooldown_until_s: float = -math.inf
     reversing: bool = False
@@ -129,8 +135,9 @@ class ApfSaController(ApfController):
                 else:
                     self.escapes += 1
                     st.failures = 0
-                    st.escape_offset = self._inside_offset(view, sc, float(end[1]))
-                    st.escape_start_s, st.held_since_s = t, None
+                    st.escape_offset = self._inside_offset(view, sc, end)
+                    st.escape_start_s = st.escape_clock_s = t
+                    st.held_since_s, st.escape_err_m = None, math.inf
                     target = self.carrot(view, sc, st.escape_offset)
                     fld = self.field(sc, sc.q[None, :], target)
             v = self.velocity(fld, task.cruise_speed_mps, v_road)
@@ -139,19 +146,26 @@ class ApfSaController(ApfController):
             out[k] = view.to_xy_velocity(sc.s, sc.d, v, self.step_s)
         return out
 
-    def _inside_offset(self, view: RoadView, sc: FrenetScene, offset: float) -> float:
-        """The centre of the lane nearest to a lateral offset at the carrot (SPEC §5: the ego keeps to
-        the centre of the lane it chose; an SA end point between lanes had the ego pass a car 0.48 m
-        apart on overtaking), else the offset shrunk until the shifted carrot keeps the car inside
-        its lanes with ``escape_margin_m`` to spare on each side (a target on the kerb is no target)."""
+    def _inside_offset(self, view: RoadView, sc: FrenetScene, end) -> float:
+        """The lateral offset the ego follows after an escape search ended at ``end`` = (s, d).
+
+        The centre of the nearest lane that is as free ahead of the end point as the search
+        demanded (``sa_free_ahead_m``; SPEC §5: the ego keeps to the centre of the lane it chose:
+        an end point between lanes had the ego pass a car 0.48 m apart on overtaking; the nearest
+        centre regardless of what stands in that lane sent it back behind the wall on
+        local_minimum), else the end point's own offset, shrunk until the shifted carrot keeps the
+        car inside its lanes with ``escape_margin_m`` to spare on each side (a target on the kerb
+        is no target)."""
+        offset = float(end[1])
         need = 0.5 * sc.width + self.p.escape_margin_m
         s_c = min(sc.s + self.lookahead(float(np.hypot(*sc.vel))), view.length_m)  # the carrot's s
         lo, hi = (float(v[0]) for v in view.corridor([s_c]))
         if view.lanes is not None:
             _, centres = view.lanes.centres(s_c)
-            c = float(centres[np.argmin(np.abs(centres - offset))])
-            if lo + need <= c <= hi - need:
-                offset = c
+            for c in sorted((float(c) for c in centres), key=lambda c: abs(c - offset)):
+                if (lo + need <= c <= hi - need and self._room_ahead(
+                        sc, at=(float(end[0]), c), heading=0.0) >= self.p.sa_free_ahead_m):
+                    return c
         for k in range(int(abs(offset) / 0.25) + 1):
             o = math.copysign(max(abs(offset) - 0.25 * k, 0.0), offset)
             if lo + need <= o <= hi - need:
@@ -165,9 +179,8 @@ class ApfSaController(ApfController):
         if not st.reversing and v_safe < 0.5 and float(np.hypot(*sc.vel)) < 0.3:
             st.reversing = True
         if st.reversing:
-            aim = np.asarray(target) - sc.q
-            room = self._room_ahead(sc, heading=math.atan2(aim[1], aim[0]))
-            if room >= self.p.escape_room_m:
+            room = self._room_ahead(sc, heading=0.0)
+            if room >= max(self.p.escape_room_m, self.lookahead(0.0)):
                 st.reversing = False
                 return v_des
             # back up against the route direction, so the nose straightens while the lateral
@@ -194,10 +207,18 @@ class ApfSaController(ApfController):
         return float(max(x[ahead].min(), 0.0) - 0.5 * sc.length)
 
     def _update_escape(self, st: _EgoState, d: float, t: float) -> None:
+        """An escape ends once its offset has been held ``escape_hold_s``, or after
+        ``escape_timeout_s`` in which it neither got ``escape_progress_m`` closer to the offset
+        nor backed up (a three-point manoeuvre gains its offset in steps, backing up in between),
+        and in any case after ``escape_max_s``."""
         p = self.p
-        if abs(d - st.escape_offset) < 1.0:
+        err = abs(d - st.escape_offset)
+        if err < 1.0:
             st.held_since_s = t if st.held_since_s is None else st.held_since_s
-        if (t - st.escape_start_s >= p.escape_timeout_s
+        if st.reversing or err <= st.escape_err_m - p.escape_progress_m:
+            st.escape_clock_s = t
+            st.escape_err_m = min(err, st.escape_err_m)
+        if (t - st.escape_clock_s >= p.escape_timeout_s or t - st.escape_start_s >= p.escape_max_s
                 or (st.held_since_s is not None and t - st.held_since_s >= p.escape_hold_s)):
             st.escape_offset, st.held_since_s, st.reversing = None, None, False
             st.history.clear()

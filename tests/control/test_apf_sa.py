@@ -1,0 +1,53 @@
+"""APF-SA's escape bookkeeping (sumo_avoid.control.apf_sa): when an escape ends, on hand-made
+sequences of lateral positions (no SUMO)."""
+from collections import deque
+
+import pytest
+
+from sumo_avoid.control.apf_sa import ApfSaController, ApfSaParams, _EgoState
+from sumo_avoid.core.interfaces import Context
+
+
+def _escaping(offset=7.0, t0=0.0):
+    st = _EgoState(deque())
+    st.escape_offset, st.escape_start_s, st.escape_clock_s = offset, t0, t0
+    return st
+
+
+def _run(ctl, st, ds, t0=0.0, dt=0.1, reversing=()):
+    """Feed d(t) until the escape ends; the time it ended (or None)."""
+    for k, d in enumerate(ds):
+        t = t0 + dt * k
+        st.reversing = k in reversing
+        ctl._update_escape(st, d, t)
+        if st.escape_offset is None:
+            return round(t, 6)
+    return None
+
+
+@pytest.fixture
+def ctl():
+    return ApfSaController(ApfSaParams(), Context(seed=1, step_s=0.1))
+
+
+def test_an_escape_without_progress_ends_after_the_timeout(ctl):
+    # the ego stands at d = 0, 7 m from its offset: no step gets 0.5 m closer than the first
+    assert _run(ctl, _escaping(), [0.0] * 200) == 10.0
+
+
+def test_progress_restarts_the_timeout(ctl):
+    # 0.6 m closer every 8 s for 40 s, then stuck at d = 3: the clock last restarts at 32 s
+    ds = [0.6 * (k // 80) for k in range(400)] + [3.0] * 200
+    ds[320:] = [2.4] * (len(ds) - 320)
+    assert _run(ctl, _escaping(), ds) == 40.0  # escape_max_s reached first (32 + 10 > 40)
+
+
+def test_backing_up_counts_as_part_of_the_manoeuvre(ctl):
+    # backing up at steps 0..119 (last at 11.9 s) with no lateral progress, then standing: the
+    # clock last restarts at 11.9 s, so the escape ends 10 s later
+    assert _run(ctl, _escaping(), [0.0] * 400, reversing=range(120)) == 21.9
+
+
+def test_an_escape_held_at_its_offset_ends_after_the_hold(ctl):
+    # within 1 m of the offset from the start: held for escape_hold_s = 3 s
+    assert _run(ctl, _escaping(), [6.5] * 100) == 3.0
