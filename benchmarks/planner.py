@@ -26,9 +26,9 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
 def main() -> None:
-    from sumo_avoid.control.ga_planner import arena_bounds, rest_of
     from sumo_avoid.core.polyline import polyline_project
     from sumo_avoid.planning import ga
+    from sumo_avoid.planning.pursuit import arena_bounds, rest_of
     from sumo_avoid.plots.planner import parse_path
     from sumo_avoid.rollout import runner
     from sumo_avoid.scenario import spec

@@ -50,11 +50,13 @@ from sumo_avoid.planning import kernels
 from sumo_avoid.planning.ga import GaParams, clearance, plan, resample
 from sumo_avoid.planning.pursuit import (
     aim_angle,
+    arena_bounds,
     cone_gap,
     corridor_gap,
     pursuit_velocity,
+    rest_of,
 )
-from sumo_avoid.planning.radar_map import RadarMap, static_returns
+from sumo_avoid.planning.radar_map import RadarMap, sampled_edges, static_returns
 from sumo_avoid.planning.road import (
     CLIP_SLACK_M,
     all_lanes_corridor,
@@ -112,7 +114,8 @@ class GaPlannerParams(GaParams):
     road_init_spread_m: float = field_doc(1.5, doc="road: init_spread_m (across the road), m")
     road_mutation_sigma_m: float = field_doc(1.5, doc="road: mutation_sigma_m, m")
     road_face_half_width_m: float = field_doc(0.0, doc="road: face_half_width_m (none: a point blocks its lane), m")
-    road_shadow_depth_m: float = field_doc(4.0, doc="road: shadow_depth_m (about a car's length), m")
+    road_shadow_depth_m: float = field_doc(4.0, doc="road: shadow_depth_m (about a car's length), along the "
+                                                    "lane beyond the point, not along the line of sight, m")
     road_memory_s: float = field_doc(20.0, doc="road: the map keeps only points a scan hit in this last time "
                                               "(traffic that stood and drove on leaves no obstacle), s")
     road_corridor_margin_m: float = field_doc(0.4, doc="road: corridor_margin_m of the governor's strip, m")
@@ -127,14 +130,17 @@ class GaPlannerParams(GaParams):
                                                         "braking where the vehicle is now (it may hide a standing "
                                                         "obstacle), m/s^2")
     road_standstill_m: float = field_doc(3.0, doc="road: following a moving vehicle, gap kept at a stop, m")
+    road_settle_m: float = field_doc(10.0, positive=True, doc="road: while no usable path is found, the car "
+                                                             "steers back to its lane's centre over this distance, m")
     road_wait_gap_m: float = field_doc(12.0, doc="road: while no usable path is found, the car stops this far "
                                                  "before a known point in its strip ahead (room to steer out later), m")
     road_lane_tol_m: float = field_doc(0.2, doc="road: a static point blocks the whole lane it lies in unless it "
                                                 "is within this + road_lane_tol_per_m x its range of a lane line, m")
     road_lane_tol_per_m: float = field_doc(0.0175, doc="road: see road_lane_tol_m (tan of the radar's 1 deg azimuth "
                                                        "step), m per m")
-    road_rear_clear_m: float = field_doc(20.0, doc="road: a car blocked by the governor backs up only when no "
-                                                   "moving vehicle is this close behind it in its lane, m")
+    road_static_min_cos: float = field_doc(0.3, doc="road: a return counts as standing only where the cosine of "
+                                                    "the angle between its line of sight and the road exceeds this "
+                                                    "(abeam, the radial speed of passing traffic is ~0)")
 
     def on_road(self) -> GaPlannerParams:
         """The parameters on a road: the ``road_*`` values in place of the field's, no cone governor."""
@@ -160,33 +166,8 @@ class _Ego:
     corridor: object = None  # on a road: s -> (d_lo, d_hi), the planner's walls (planning/road.py)
     path_sd: np.ndarray | None = None  # on a road: the best path's waypoints (s, d)
     now: float = 0.0
-    rear_clear: bool = True  # on a road: no moving vehicle close behind in the ego's lane (it may back up)
     pos: np.ndarray | None = None  # on a road: the centre at this step, m
     plans: list = field(default_factory=list)
-
-
-def _sampled_edges(polygons, step_m: float) -> np.ndarray:
-    """Points every ``step_m`` along the edges of each polygon (the truth map)."""
-    out = [np.zeros((0, 2))]
-    for poly in polygons:
-        poly = np.asarray(poly, float)
-        for a, b in zip(poly, np.roll(poly, -1, axis=0)):
-            k = max(1, int(np.ceil(np.hypot(*(b - a)) / step_m)))
-            out.append(a + np.linspace(0.0, 1.0, k, endpoint=False)[:, None] * (b - a))
-    return np.concatenate(out)
-
-
-def arena_bounds(walls, margin_m: float):
-    """(xmin, ymin, xmax, ymax) the waypoints keep to: the walls' box shrunk by ``margin_m``; None without walls."""
-    if walls is None:
-        return None
-    w = np.asarray(walls, float)
-    return (*(w.min(axis=0) + margin_m), *(w.max(axis=0) - margin_m))
-
-
-def rest_of(path, s_m: float, pos) -> np.ndarray:
-    """``pos``, then the path's vertices beyond arc length ``s_m`` (warm start; the clearance trigger)."""
-    return np.concatenate([np.asarray(pos, float)[None], path[np.searchsorted(arc_lengths(path), s_m, side="right"):]])
 
 
 class GaPlannerController:
@@ -198,7 +179,7 @@ class GaPlannerController:
     def __init__(self, params: GaPlannerParams, ctx):
         self.p = params
         self.rng = ctx.rng()
-        self.truth_points = _sampled_edges(ctx.obstacles, params.map_cell_m)
+        self.truth_points = sampled_edges(ctx.obstacles, params.map_cell_m)
         self.bounds = arena_bounds(ctx.walls, params.wall_margin_m)
         self.road = ctx.walls is None  # no arena: every ego plans in its route frame
         self.pr = params.on_road()
@@ -211,8 +192,10 @@ class GaPlannerController:
     def add_ego(self, task: EgoTask) -> None:
         road = self.road and bool(task.lanes)
         p = self.pr if road else self.p
-        self.egos[task.vid] = _Ego(task, RadarMap(p.map_cell_m, p.shadow_depth_m, p.shadow_step_m, p.new_obstacle_gap_m,
-                                                  p.face_half_width_m), view=RoadView(task) if road else None,
+        # on a road the shadow is cast along the lane at plan time (planning/road.py whole_lanes)
+        self.egos[task.vid] = _Ego(task, RadarMap(p.map_cell_m, 0.0 if road else p.shadow_depth_m, p.shadow_step_m,
+                                                  p.new_obstacle_gap_m, p.face_half_width_m, refine=road),
+                                   view=RoadView(task) if road else None,
                                 corridor=all_lanes_corridor(task.lanes) if road else None)
 
     def remove_ego(self, vid: str) -> None:
@@ -241,13 +224,14 @@ class GaPlannerController:
     def _points(self, st: _Ego) -> np.ndarray:
         if st.truth:
             return self.truth_points
-        return st.map.points if st.view is None else st.map.seen_since(st.now - self.p.road_memory_s)
+        return st.map.points if st.view is None else st.map.seen_since(st.now - self.p.road_memory_s)[0]
 
     def _trigger(self, st: _Ego, obs: Observation, vid: str, pos, t: float) -> str:
         p = self._params(st)
         st.truth = obs.detections is None
         if not st.truth:
-            pts, src = static_returns(obs, vid, p.static_speed_mps)
+            along = None if st.view is None or obs.route_heading is None else float(obs.route_heading[obs.index(vid)])
+            pts, src = static_returns(obs, vid, p.static_speed_mps, along, p.road_static_min_cos)
             if st.map.add(src, pts, t) and st.path is not None:
                 st.pending = st.pending or "new_obstacle"
         if st.path is None:
@@ -287,8 +271,10 @@ class GaPlannerController:
         p, view = self.pr, st.view
         s0, d0 = sc.s, sc.d
         s_end = min(s0 + p.road_horizon_m, float(view.goal[0]))
-        static = whole_lanes(in_frame(self._points(st), st.pos, view.frame, s0, s_end, p.road_horizon_m + 20.0),
-                             st.task.lanes, s0, d0, p.road_lane_tol_m, p.road_lane_tol_per_m)
+        xy, ranges = st.map.seen_since(st.now - p.road_memory_s)
+        sd, idx = in_frame(xy, st.pos, view.frame, s0, s_end, p.road_horizon_m + 20.0)
+        static = whole_lanes(sd, ranges[idx], st.task.lanes, s0, p.road_lane_tol_m, p.road_lane_tol_per_m,
+                             p.shadow_depth_m, p.shadow_step_m)
         # at least half its cruise speed: a car waiting for a gap accelerates into it (planned at 1 m/s,
         # every car within 20 s behind blocked the next lane beside it, and the gap never came)
         v_plan = max(float(sc.vel[0]), 0.5 * st.task.cruise_speed_mps)
@@ -310,8 +296,14 @@ class GaPlannerController:
         t0 = time.perf_counter()
         res = plan((s0, d0), goal, pts, p, self.rng, corridor_clip(st.corridor, p.road_wall_margin_m + CLIP_SLACK_M, s0, s_end), warm)
         ms = 1e3 * (time.perf_counter() - t0)
-        # no usable path (traffic beside, no way past yet): keep the current offset, plan again
-        drive = res.path if res.usable else np.array([[s0, d0], [s_end, d0]])
+        # no usable path (traffic beside, no way past yet): back to the centre of the lane the ego
+        # is in and wait there (the governor stops it road_wait_gap_m short of what blocks it)
+        if res.usable:
+            drive = res.path
+        else:
+            c = lane_centres(st.task.lanes, s0)
+            own = float(c[np.argmin(np.abs(c - d0))])
+            drive = np.array([[s0, d0], [min(s0 + p.road_settle_m, s_end - 1.0), own], [s_end, own]])
         dense = resample(drive, max(2, int(np.ceil(arc_lengths(drive)[-1] / 2.0)) + 1))
         st.path_sd, st.usable, st.s, st.last_plan_s = drive, res.usable, 0.0, t
         st.path = np.concatenate([st.pos[None], view.frame.to_xy(dense[1:, 0], dense[1:, 1])])
@@ -342,8 +334,6 @@ class GaPlannerController:
         st.now, st.pos = t, np.asarray(pos, float)
         sc = st.view.scene(obs, row, p.road_sense_radius_m)
         moving = np.hypot(*sc.o_vel.T) >= p.static_speed_mps
-        back = moving & (sc.o_pos[:, 0] < sc.s) & (sc.s - sc.o_pos[:, 0] < p.road_rear_clear_m)
-        st.rear_clear = not (back & (np.abs(sc.o_pos[:, 1] - sc.d) < 0.5 * (sc.width + sc.o_width) + 0.5)).any()
         trigger = self._trigger(st, obs, vid, pos, t)
         if trigger:
             self._plan_road(st, sc, moving, vid, t, trigger)
@@ -380,7 +370,7 @@ class GaPlannerController:
         v_stop = np.sqrt(2.0 * p.governor_decel_mps2 * max(gap - p.stop_gap_m, 0.0))
         near = cone_gap(self._points(st), pos, heading, 0.5 * length, np.radians(p.governor_cone_deg))
         v_gov = min(v_stop, near / p.governor_time_gap_s)
-        if v_stop < 0.5 and abs(speed) < 0.3 and not st.rear_clear:  # blocked, traffic behind: plan again
+        if v_stop < 0.5 and abs(speed) < 0.3 and st.view is not None:  # blocked on a road: never back up, plan again
             st.pending = st.pending or "blocked"
         elif v_stop < 0.5 and abs(speed) < 0.3:  # blocked: back up, then plan again from there
             st.reverse_until_s, st.reverse_turn = t + p.reverse_s, 1.0 if alpha >= 0 else -1.0

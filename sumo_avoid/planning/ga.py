@@ -58,6 +58,11 @@ class GaParams:
     smooth_threshold: float = field_doc(1.15, doc="T_s of the smoothing operator (> 1)")
     init_spread_m: float = field_doc(25.0, doc="standard deviation of the initial waypoints' offset across the "
                                                "start-goal line, m")
+    free_init_share: float = field_doc(0.25, doc="share of the initial population led out through free space: "
+                                                 "start, two via points each reached by a collision-free segment, "
+                                                 "then straight to the goal")
+    free_init_reach_m: float = field_doc(30.0, positive=True, doc="those via points lie at most this far from "
+                                                                  "the start and from each other, m")
 
     def __post_init__(self):
         for key, ok, what in (("waypoints", self.waypoints >= 3, "an integer >= 3"),
@@ -66,7 +71,8 @@ class GaParams:
                               ("elite", self.elite < self.population, "an integer below population"),
                               ("smooth_threshold", self.smooth_threshold > 1.0, "a number > 1"),
                               *((k, getattr(self, k) <= 1.0, "a number in [0, 1]") for k in
-                                ("crossover_prob", "mutation_threshold", "regression_prob", "regression_rate"))):
+                                ("crossover_prob", "mutation_threshold", "regression_prob", "regression_rate",
+                                 "free_init_share"))):
             if not ok:
                 raise FieldError(key, what, getattr(self, key))
 
@@ -129,13 +135,20 @@ def fitness(pop, points, p: GaParams):
 
 
 def violation(pop, points, radius_m: float, first_radius_m: float, presorted: bool = False):
-    """(clearance (N,), violation (N,)): how far each path falls short of being usable, m (0 = usable):
-    its first segment must keep ``first_radius_m`` from every point, the others ``radius_m``. (The
-    ego may already be closer than the safety radius to a point it has just discovered; every path
-    starts there, so the first segment asks only that the ego not get closer.) ``presorted``:
-    ``points`` come from :func:`sorted_points`."""
-    c1, c2 = _clearances(pop, points if presorted else sorted_points(points))
-    return np.minimum(c1, c2), np.maximum(np.maximum(radius_m - c2, first_radius_m - c1), 0.0)
+    """(clearance (N,), violation (N,)): how far each path falls short of being usable, m (0 = usable),
+    summed over its segments: its first segment must keep ``first_radius_m`` from every point, the
+    others ``radius_m``. (The ego may already be closer than the safety radius to a point it has
+    just discovered; every path starts there, so the first segment asks only that the ego not get
+    closer.) The sum, not the worst segment: a path that clears one of several obstacles it crosses
+    ranks better, so the GA can repair a path piece by piece (with the worst segment alone it
+    made no progress where a path crossed several obstacles). ``presorted``: ``points`` come from
+    :func:`sorted_points`."""
+    pts = points if presorted else sorted_points(points)
+    c1, c2 = _clearances(pop, pts)
+    if len(pts) == 0:
+        return np.minimum(c1, c2), np.zeros(len(c1))
+    v = kernels.shortfall(np.ascontiguousarray(pop, float), pts, float(first_radius_m), float(radius_m))
+    return np.minimum(c1, c2), np.maximum(v, 0.0)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -226,6 +239,46 @@ def initial_population(start, goal, p: GaParams, rng: np.random.Generator, bound
     return clip(pop, bounds)
 
 
+def free_space_paths(start, goal, k: int, n: int, points, p: GaParams, rng: np.random.Generator, bounds,
+                     first_radius_m: float, tries: int = 8) -> np.ndarray:
+    """Up to ``k`` paths (k', n, 2) that leave ``start`` through free space: a first via point v1
+    in a random direction at U(safety_radius, reach) from the start, kept when the segment there
+    keeps ``first_radius_m`` and v1 itself the safety radius from every point; a second v2 the same
+    way from v1 (both segments and points at the safety radius); then straight on to the goal, the
+    remaining waypoints evenly along that leg. ``tries`` candidates per path (vectorised); a v1
+    without a free v2 goes straight on from v1; fewer than ``k`` paths when fewer v1 are free.
+    ``points`` from :func:`sorted_points`. (Perturbing the straight start-goal line never finds a
+    way out that begins away from the goal: down the channel the ego stands in, back round an
+    obstacle; seen on field seed 16.)"""
+    start, goal = np.asarray(start, float), np.asarray(goal, float)
+    r, reach = p.safety_radius_m, max(p.free_init_reach_m, p.safety_radius_m)
+
+    def hop(frm, first):
+        """(M, 2) a random point from each of ``frm`` (M, 2), and whether it and the segment are free."""
+        a = rng.uniform(0.0, 2.0 * np.pi, len(frm))
+        to = frm + rng.uniform(r, reach, len(frm))[:, None] * np.column_stack([np.cos(a), np.sin(a)])
+        to = clip(np.stack([frm, to, to], axis=1), bounds)[:, 1]  # (M, 3, 2): the waypoint kept inside
+        if len(points) == 0:
+            return to, np.ones(len(frm), bool)
+        seg, _ = kernels.clearance(np.ascontiguousarray(np.stack([frm, to], axis=1)), points)
+        at, _ = kernels.clearance(np.ascontiguousarray(np.stack([to, to], axis=1)), points)
+        return to, (seg >= first) & (at >= r)
+
+    v1, ok = hop(np.repeat(start[None], k * tries, axis=0), first_radius_m)
+    v1 = v1[ok][:k]
+    if len(v1) == 0 or n < 3:
+        return np.zeros((0, n, 2))
+    v2, ok2 = hop(np.repeat(v1, tries, axis=0), r)
+    ok2 = ok2.reshape(len(v1), tries)
+    pick = np.where(ok2.any(axis=1), np.argmax(ok2, axis=1), -1)
+    v2 = np.where((pick >= 0)[:, None], v2.reshape(len(v1), tries, 2)[np.arange(len(v1)), np.maximum(pick, 0)], v1)
+    m = n - 3  # waypoints after v2 on the straight leg to the goal (the goal included)
+    if m < 1:  # n = 3: start, v1, goal
+        return np.stack([np.repeat(start[None], len(v1), 0), v1, np.repeat(goal[None], len(v1), 0)], axis=1)
+    leg = v2[:, None] + np.linspace(0.0, 1.0, m + 1)[None, 1:, None] * (goal - v2)[:, None]
+    return np.concatenate([np.repeat(start[None, None], len(v1), 0), v1[:, None], v2[:, None], leg], axis=1)
+
+
 def clip(pop, bounds):
     """Waypoints kept inside the box ``bounds`` = (xmin, ymin, xmax, ymax), or by ``bounds(pop)`` when
     it is a function (the road's corridor, :func:`sumo_avoid.planning.road.corridor_clip`), or
@@ -280,6 +333,11 @@ def plan(start, goal, points, p: GaParams, rng: np.random.Generator, bounds=None
     d0 = float(np.hypot(*(points - np.asarray(start, float)).T).min()) if len(points) else np.inf
     first = min(r, d0 - 0.01)
     pop = initial_population(start, goal, p, rng, bounds, warm)
+    k = min(round(p.free_init_share * p.population), p.population - 1 - p.population // 4)
+    if k > 0:  # the last k paths (the line offsets) give way to paths led out through free space
+        free = free_space_paths(start, goal, k, p.waypoints, points, p, rng, bounds, first)
+        if len(free):
+            pop[len(pop) - len(free):] = clip(free, bounds)
     history: list[float] = []
     usable_at = None
     best, same = None, 0

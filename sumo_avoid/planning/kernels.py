@@ -54,6 +54,27 @@ def clearance(pop, pts):
 
 
 @njit(cache=True, error_model="numpy")
+def shortfall(pop, pts, first_radius, radius):
+    """(N,) for each path pop[k] (n, 2): the sum over its segments of how far each falls short of
+    its radius (``first_radius`` for the first segment, ``radius`` for the others) from the nearest
+    of ``pts`` (sorted by x), m; 0 when every segment keeps its radius. Each segment looks only at
+    the points within its radius of its x extent."""
+    N, n = pop.shape[0], pop.shape[1]
+    out = np.zeros(N)
+    for k in range(N):
+        total = 0.0
+        for i in range(n - 1):
+            rad = first_radius if i == 0 else radius
+            if rad <= 0.0:
+                continue
+            best = _segment_min(pop[k, i, 0], pop[k, i, 1], pop[k, i + 1, 0] - pop[k, i, 0],
+                                pop[k, i + 1, 1] - pop[k, i, 1], pts, rad * rad)
+            total += rad - np.sqrt(best)
+        out[k] = total
+    return out
+
+
+@njit(cache=True, error_model="numpy")
 def smooth(pop, threshold):
     """The smoothing operator in place, waypoint after waypoint (see :func:`sumo_avoid.planning.ga.smooth`)."""
     for k in range(pop.shape[0]):
@@ -71,4 +92,5 @@ def smooth(pop, threshold):
 def warm() -> None:
     """Compile (or load from the cache) now, with the set-up, not inside the first plan."""
     clearance(np.zeros((1, 2, 2)), np.zeros((1, 2)))
+    shortfall(np.zeros((1, 2, 2)), np.zeros((1, 2)), 1.0, 1.0)
     smooth(np.zeros((1, 3, 2)), 1.5)

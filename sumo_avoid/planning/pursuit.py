@@ -71,3 +71,16 @@ def pursuit_velocity(path, s_ego: float, pos, heading: float, cruise_mps: float,
         v_corner = np.sqrt(lat_accel_mps2 * radius + 2.0 * decel_mps2 * (s_v[ahead] - s_ego))
         speed = min(speed, float(v_corner.min(initial=np.inf)))
     return speed * aim
+
+
+def arena_bounds(walls, margin_m: float):
+    """(xmin, ymin, xmax, ymax) the waypoints keep to: the walls' box shrunk by ``margin_m``; None without walls."""
+    if walls is None:
+        return None
+    w = np.asarray(walls, float)
+    return (*(w.min(axis=0) + margin_m), *(w.max(axis=0) - margin_m))
+
+
+def rest_of(path, s_m: float, pos) -> np.ndarray:
+    """``pos``, then the path's vertices beyond arc length ``s_m`` (warm start; the clearance trigger)."""
+    return np.concatenate([np.asarray(pos, float)[None], path[np.searchsorted(arc_lengths(path), s_m, side="right"):]])

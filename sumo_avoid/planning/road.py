@@ -15,7 +15,9 @@ across it, left positive; :mod:`sumo_avoid.core.frenet`). Pure numpy, no SUMO.
   up with it, a faster car behind the stretch where it would come alongside, a car keeping pace
   the whole horizon in its lane; a car that pulls away, or that the ego stays ahead of, marks
   nothing. A vehicle behind the ego in the ego's own lane is left out (it follows the ego).
-* **Standing objects** (:func:`whole_lanes`): a static point blocks the whole width of its lane.
+* **Standing objects** (:func:`whole_lanes`): a static point blocks the whole width of its lane,
+  or, within its measurement's uncertainty of a lane line, that line; its body lies along the lane
+  beyond it.
 * **Goal of a plan** (:func:`pick_lane`): the look-ahead point ``horizon`` ahead on the lane centre
   nearest the ego's own offset whose point keeps ``free_m`` from every obstacle point.
 """
@@ -31,15 +33,17 @@ from sumo_avoid.core.types import LanePiece
 CLIP_SLACK_M = 0.2
 
 
-def in_frame(xy, pos, frame, s0: float, s_end: float, reach_m: float) -> np.ndarray:
-    """(M, 2) the points ``xy`` (K, 2) within ``reach_m`` of ``pos`` in the route frame ``frame``
-    (projected near s0), those with s in (s0 - 10 m, s_end + 10 m)."""
+def in_frame(xy, pos, frame, s0: float, s_end: float, reach_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """(points (M, 2) (s, d), their indices into ``xy`` (M,)): the points ``xy`` (K, 2) within
+    ``reach_m`` of ``pos`` in the route frame ``frame`` (projected near s0), those with s in
+    (s0 - 10 m, s_end + 10 m)."""
     xy = np.asarray(xy, float).reshape(-1, 2)
-    xy = xy[np.hypot(*(xy - np.asarray(pos, float)).T) < reach_m]
-    if len(xy) == 0:
-        return np.zeros((0, 2))
-    s, d = frame.to_frenet(xy, np.full(len(xy), s0), reach_m)
-    return np.column_stack([s, d])[(s > s0 - 10.0) & (s < s_end + 10.0)]
+    idx = np.flatnonzero(np.hypot(*(xy - np.asarray(pos, float)).T) < reach_m)
+    if len(idx) == 0:
+        return np.zeros((0, 2)), idx
+    s, d = frame.to_frenet(xy[idx], np.full(len(idx), s0), reach_m)
+    keep = (s > s0 - 10.0) & (s < s_end + 10.0)
+    return np.column_stack([s, d])[keep], idx[keep]
 
 
 def lane_centres(pieces: tuple[LanePiece, ...], s: float) -> np.ndarray:
@@ -73,28 +77,39 @@ def all_lanes_corridor(pieces: tuple[LanePiece, ...]):
     return corridor
 
 
-def whole_lanes(points, pieces: tuple[LanePiece, ...], s_ego: float, d_ego: float, tol_m: float,
-                tol_per_m: float) -> np.ndarray:
-    """Static points (s, d) (K, 2) as lane blockers: a point that lies clearly inside a lane (farther
-    than tol_m + tol_per_m x its distance from the ego from the lane's lines) becomes three points,
-    the right bound, the centre and the left bound of that lane (a standing object in a lane blocks
-    the lane: the radar reports only an object's nearest point, and 2.7 m of debris seen head-on gave
-    one point, a path that kept the safety radius from it ran into the rest); a point near a lane
-    line stays a point (the radar's 1 deg azimuth steps move a return 0.8 m across at 45 m: a corner
-    of debris in the next lane read as being in the ego's). Lane centres and widths from the edge
-    at the point's s. Returns (M, 2)."""
+def whole_lanes(points, ranges, pieces: tuple[LanePiece, ...], s_ego: float, tol_m: float, tol_per_m: float,
+                shadow_depth_m: float = 0.0, shadow_step_m: float = 2.0) -> np.ndarray:
+    """Static points (s, d) (K, 2), measured at ``ranges`` (K,) m, as lane blockers. A point is
+    uncertain across the line of sight by tol = tol_m + tol_per_m x the range it was measured at
+    (the radar's azimuth steps: 1 deg is 1.2 m at 70 m). One that lies clearly inside a lane
+    (farther than tol from its lines) becomes three points, the right bound, the centre and the
+    left bound of that lane (a standing object in a lane blocks the lane: the radar reports only an
+    object's nearest point, and 2.7 m of debris seen head-on gave one point; a path that kept the
+    safety radius from it ran into the rest). One within tol of a lane line is put on that line:
+    an object's edge there, on one side or the other (debris seen from 70 m read 0.4-0.8 m into
+    both neighbouring lanes). Each resulting point also marks the object's body beyond it, along
+    the lane away from the ego (``shadow_depth_m`` deep, a point every ``shadow_step_m``): a
+    standing object on a road lies along its lane, not along the line of sight (seen across a
+    bend, the line of sight put the shadow of debris in the next lane). Lane centres and widths
+    from the edge at the point's s. Returns (M, 2)."""
     pts = np.asarray(points, float).reshape(-1, 2)
+    rng = np.broadcast_to(np.asarray(ranges, float), (len(pts),))
     out = [np.zeros((0, 2))]
-    for s, d in pts:
+    for (s, d), r in zip(pts, rng):
         c = lane_centres(pieces, s)
         i = int(np.argmin(np.abs(c - d)))
         half = 0.5 * _width_at(pieces, s, i)
-        tol = tol_m + tol_per_m * float(np.hypot(s - s_ego, d - d_ego))
-        if half - abs(d - c[i]) <= tol:
-            out.append(np.array([[s, d]]))
+        if half - abs(d - c[i]) <= tol_m + tol_per_m * float(r):
+            out.append(np.array([[s, c[i] + np.copysign(half, d - c[i])]]))
         else:
             out.append(np.array([[s, c[i] - half], [s, c[i]], [s, c[i] + half]]))
-    return np.concatenate(out)
+    lanes = np.concatenate(out)
+    if shadow_depth_m <= 0.0 or shadow_step_m <= 0.0 or len(lanes) == 0:
+        return lanes
+    steps = np.arange(0, int(shadow_depth_m / shadow_step_m) + 1) * shadow_step_m
+    away = np.where(lanes[:, 0] >= s_ego, 1.0, -1.0)
+    body = lanes[:, None, :] + np.stack([away[:, None] * steps[None], np.zeros((len(lanes), len(steps)))], -1)
+    return body.reshape(-1, 2)
 
 
 def _width_at(pieces, s: float, lane: int) -> float:

@@ -131,8 +131,38 @@ def test_first_segment_needs_only_to_not_get_closer():
     c, v = ga.violation(pop, pts, 3.0, 2.2)
     assert c == pytest.approx([math.sqrt(5), 2.0])
     # path 1: first segment keeps sqrt(5) >= 2.2, the rest 12 m; path 2: first 2.0 (0.2 short),
-    # second segment from its start (2, 0): sqrt(5) (3 - sqrt(5) short)
-    assert v == pytest.approx([0.0, 3.0 - math.sqrt(5)])
+    # second segment from its start (2, 0): sqrt(5) (3 - sqrt(5) short); the shortfalls add up
+    assert v == pytest.approx([0.0, 0.2 + 3.0 - math.sqrt(5)])
+
+
+def test_violation_adds_the_shortfall_of_every_segment():
+    # points 1 m below the middle of two segments of a path along y = 0: each 2 m short of 3 m
+    pts = np.array([[5.0, -1.0], [15.0, -1.0]])
+    one = _paths([[0, 0], [10, 0], [20, 0]])
+    c, v = ga.violation(one, pts[:1], 3.0, 3.0)
+    assert c == pytest.approx([1.0]) and v == pytest.approx([2.0])
+    c, v = ga.violation(one, pts, 3.0, 3.0)  # the worst segment alike, the sum twice as large
+    assert c == pytest.approx([1.0]) and v == pytest.approx([4.0])
+
+
+def test_free_space_paths_leave_through_free_segments():
+    # the start inside a U of points open to the west (-x), the goal east behind its bottom
+    u = np.concatenate([np.column_stack([np.arange(-2.0, 9.0), np.full(11, 6.0)]),
+                        np.column_stack([np.arange(-2.0, 9.0), np.full(11, -6.0)]),
+                        np.column_stack([np.full(13, 8.0), np.arange(-6.0, 7.0)])])
+    p = ga.GaParams(free_init_reach_m=20.0)
+    pts = ga.sorted_points(u)
+    paths = ga.free_space_paths([0.0, 0.0], [40.0, 0.0], 10, 8, pts, p, np.random.default_rng(3), None, 3.0)
+    assert len(paths) == 10
+    assert paths[:, 0] == pytest.approx(np.zeros((10, 2))) and paths[:, -1] == pytest.approx(np.tile([40.0, 0.0], (10, 1)))
+    first, rest = ga.kernels.clearance(np.ascontiguousarray(paths[:, :3]), pts)
+    assert (first >= 3.0).all() and (rest >= 3.0).all()  # start -> v1 -> v2 keep the radius
+    hop = np.hypot(*(paths[:, 1] - paths[:, 0]).T)
+    assert ((hop >= 3.0) & (hop <= 20.0)).all()
+    assert (paths[:, 1, 0] <= 5.0).all()  # 3 m short of the U's closed end at x = 8
+    # after v2 the waypoints are evenly spaced on the straight leg to the goal
+    leg = np.diff(paths[:, 2:], axis=1)
+    assert np.hypot(*leg.transpose(2, 0, 1)) == pytest.approx(np.repeat(np.hypot(*leg[:, :1].transpose(2, 0, 1)), 5, axis=1))
 
 
 def _wall():

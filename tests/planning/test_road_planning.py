@@ -53,12 +53,28 @@ def test_pick_lane_nearest_free_lane_centre():
     assert pick_lane(centres, 0.0, 60.0, [[60.0, 1.0], [60.0, 4.5], [60.0, 9.0]], 3.0) == 7.0
 
 
-def test_whole_lanes_blocks_the_lane_unless_the_point_is_near_a_line():
-    # range 30 m: tolerance 0.2 + 0.0175 * 30 = 0.725 m
-    out = whole_lanes([[30.0, 3.0]], PIECES, 0.0, 3.5, 0.2, 0.0175)  # 1.25 m inside its lane
+def test_whole_lanes_blocks_the_lane_or_the_line_within_the_measurement_error():
+    # measured at 30 m: tolerance 0.2 + 0.0175 * 30 = 0.725 m
+    out = whole_lanes([[30.0, 3.0]], [30.0], PIECES, 0.0, 0.2, 0.0175)  # 1.25 m inside its lane
     assert out == pytest.approx(np.array([[30.0, 1.75], [30.0, 3.5], [30.0, 5.25]]))
-    out = whole_lanes([[30.0, 5.0]], PIECES, 0.0, 3.5, 0.2, 0.0175)  # 0.25 m from the line: a point
-    assert out == pytest.approx(np.array([[30.0, 5.0]]))
+    out = whole_lanes([[30.0, 5.0]], [30.0], PIECES, 0.0, 0.2, 0.0175)  # 0.25 m from the line: on the line
+    assert out == pytest.approx(np.array([[30.0, 5.25]]))
+    out = whole_lanes([[30.0, 5.64]], [30.0], PIECES, 0.0, 0.2, 0.0175)  # 0.39 m into the left lane: the line
+    assert out == pytest.approx(np.array([[30.0, 5.25]]))
+    # the same point measured at 10 m (tolerance 0.375 m) is 1.36 m inside the left lane: blocks it
+    out = whole_lanes([[30.0, 5.64]], [10.0], PIECES, 0.0, 0.2, 0.0175)
+    assert out == pytest.approx(np.array([[30.0, 5.25], [30.0, 7.0], [30.0, 8.75]]))
+    # the error is that of the measurement, not of the ego's distance now: measured at 70 m
+    # (tolerance 1.425 m), 0.39 m from the line stays on the line with the ego 5 m away
+    out = whole_lanes([[30.0, 5.64]], [70.0], PIECES, 25.0, 0.2, 0.0175)
+    assert out == pytest.approx(np.array([[30.0, 5.25]]))
+
+
+def test_whole_lanes_body_lies_along_the_lane_away_from_the_ego():
+    # 4 m deep, a point every 2 m: s + 0, 2, 4 ahead of the ego; s - 0, 2, 4 behind it
+    out = whole_lanes([[30.0, 5.0], [-20.0, 5.0]], [30.0, 20.0], PIECES, 0.0, 0.2, 0.0175, 4.0, 2.0)
+    assert out == pytest.approx(np.array([[30.0, 5.25], [32.0, 5.25], [34.0, 5.25],
+                                          [-20.0, 5.25], [-22.0, 5.25], [-24.0, 5.25]]))
 
 
 def test_corridor_clip_sorts_and_keeps_waypoints_inside():

@@ -33,6 +33,22 @@ def test_cells_keep_one_point_and_new_obstacles_are_far_from_earlier_returns():
     assert not m.add([0.0, 0.0], np.zeros((0, 2)), 0.4)
 
 
+def test_points_keep_their_measured_range_and_refine_takes_the_closer_measurement():
+    m = RadarMap(cell_m=2.0, shadow_depth_m=2.0, shadow_step_m=2.0, new_gap_m=4.0, refine=True)
+    m.add([0.0, 0.5], [[40.5, 0.5]], 1.0)  # 40.5 m away; its shadow at 42.5 has the same range
+    pts, rng = m.seen_since(0.0)
+    assert pts == pytest.approx(np.array([[40.5, 0.5], [42.5, 0.5]])) and rng == pytest.approx([40.5, 40.5])
+    m.add([30.0, 0.0], [[41.0, 1.5]], 2.0)  # the same cell measured from 11.1 m: the point moves there
+    pts, rng = m.seen_since(1.5)  # (its shadow (42.98, 1.77) refines the old shadow's cell too)
+    assert pts[0] == pytest.approx([41.0, 1.5]) and rng[0] == pytest.approx(math.hypot(11.0, 1.5))
+    m.add([0.0, 0.0], [[40.1, 0.1]], 3.0)  # from farther again: the closer measurement stays
+    assert m.seen_since(0.0)[0][0] == pytest.approx([41.0, 1.5])
+    plain = RadarMap(cell_m=2.0, shadow_depth_m=0.0, shadow_step_m=0.0, new_gap_m=4.0)
+    plain.add([0.0, 0.5], [[40.5, 0.5]], 1.0)
+    plain.add([30.0, 0.0], [[41.0, 1.5]], 2.0)
+    assert plain.points == pytest.approx(np.array([[40.5, 0.5]]))  # without refine the first point stays
+
+
 def test_pursuit_aims_at_the_lookahead_point_at_the_arc_speed():
     path = np.array([[0.0, 0.0], [100.0, 0.0]])
     v = pursuit_velocity(path, 0.0, [0.0, 1.0], 0.0, cruise_mps=10.0, lookahead_m=5.0, lat_accel_mps2=2.0,
