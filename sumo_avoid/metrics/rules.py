@@ -28,6 +28,7 @@ from sumo_avoid.metrics.base import Metric
 from sumo_avoid.rollout.result import RunResult
 from sumo_avoid.safety.rules import RED, STOP_SIGNS
 from sumo_avoid.safety.yielding import (
+    can_give_way,
     critical_gap_s,
     first_crossing,
     foe_arrival,
@@ -108,9 +109,11 @@ def yield_crossings(run: RunResult) -> list[dict]:
                 continue
             now = traj[traj["step"] == steps[k]]
             ids = now["id"].to_numpy()
+            speed = now["speed"].to_numpy(float)
+            # a zipper foe that could still stop comfortably lets the ego in (safety.yielding)
+            skip = None if lk.state != "Z" else (lambda t_f, r, x: bool(can_give_way(x, speed[r], p.comfort_decel_mps2)))
             t_f, who = foe_arrival(lk.foes, signals, rows_by_lane(now["lane"].fillna("").to_numpy()), now["lane_pos"].to_numpy(float),
-                                   now["speed"].to_numpy(float), now["length"].to_numpy(float),
-                                   set(np.flatnonzero(ids == vid).tolist()))
+                                   speed, now["length"].to_numpy(float), set(np.flatnonzero(ids == vid).tolist()), skip)
             t_c = critical_gap_s(lk, p)
             out.append({"ego": vid, "junction": lk.junction, "time_s": float(t[k + 1]),
                         "state": link_state(signals, lk.tls, lk.link_index, lk.state),

@@ -49,6 +49,7 @@ from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.polyline import polyline_track
 from sumo_avoid.core.types import EgoTask, Keys
 from sumo_avoid.safety.yielding import (
+    can_give_way,
     critical_gap_s,
     ego_time_to_line,
     foe_arrivals,
@@ -180,11 +181,12 @@ class TrafficRulesLayer:
                 continue
             if not yields(link, snap.signals) or late:
                 continue  # priority now, or too late to stop: go on
-            arrivals = [a for a, _ in foe_arrivals(link.foes, snap.signals, lanes, snap.lane_pos, snap.speed,
-                                                   snap.length, {row})]
+            found = foe_arrivals(link.foes, snap.signals, lanes, snap.lane_pos, snap.speed, snap.length, {row})
+            arrivals = [a for a, _, _ in found]
             t_c, t_e = critical_gap_s(link, p), ego_time_to_line(d, v, p.stop_margin_m)
             if link.state == "Z":  # take turns: arrive in the first free slot (yielding.zipper_slot)
-                t_slot = zipper_slot(t_e, arrivals, t_c + p.gap_margin_s)
+                give = can_give_way([x for _, _, x in found], [snap.speed[r] for _, r, _ in found], p.comfort_decel_mps2)
+                t_slot = zipper_slot(t_e, arrivals, t_c + p.gap_margin_s, give)
                 return (math.inf, -1.0) if t_slot <= t_e else (max(d - p.stop_margin_m, 0.0) / t_slot, link.s_stop_m)
             if min(arrivals, default=math.inf) < t_e + t_c + p.gap_margin_s:
                 return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m

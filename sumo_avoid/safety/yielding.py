@@ -25,9 +25,14 @@ arrives within t_c (without the margin).
 
 A zipper merge ('Z', two lanes into one) is taken in turn, not by waiting for a 4.5 s gap: its t_c
 is ``zipper_headway_s`` h, and on the way to the merge the ego aims at the earliest arrival time
-t* >= t_e with no foe arriving within h before or after it (:func:`zipper_slot`), driving at most
-(d - margin) / t* while t* > t_e: it slows down to slot in behind a foe instead of stopping at the
-lane's end (an ego on an acceleration lane among 23 m/s traffic stood 20 s at its end).
+t* >= t_e with no foe arriving within h before it, nor within h after it unless that foe *can give
+way* (:func:`zipper_slot`), driving at most (d - margin) / t* while t* > t_e: it slows down to slot
+in behind a foe instead of stopping at the lane's end (an ego on an acceleration lane among 23 m/s
+traffic stood 20 s at its end). A foe can give way when it could still stop comfortably before the
+conflict point, v_f^2 / (2 b_comf) <= x: in turn-taking the one behind lets the other in. Without
+this, an ego in the through lane let every car of a dense ramp stream go first (cars ~2.5 s apart
+never leave a 2 h window) and stood 25 s at the merge while SUMO's cars behind it changed lanes to
+pass (ramp_main seed 1). The metric judges a zipper crossing the same way.
 """
 from __future__ import annotations
 
@@ -64,14 +69,25 @@ def critical_gap_s(link: RouteLink, p) -> float:
     return p.critical_gap_left_s if link.direction in ("l", "L", "t") else p.critical_gap_s
 
 
-def zipper_slot(t_e: float, arrivals, headway_s: float) -> float:
-    """The earliest time >= t_e at which the ego can reach a zipper merge with every foe arriving at
-    least ``headway_s`` before or after it: t_e itself, or ``headway_s`` after one of the foes."""
-    a = np.sort(np.asarray(arrivals, float))
-    for t in (t_e, *(a[a + headway_s > t_e] + headway_s)):
-        if not np.any(np.abs(a - t) < headway_s - 1e-9):
+def zipper_slot(t_e: float, arrivals, headway_s: float, gives_way=None) -> float:
+    """The earliest time t >= t_e at which the ego can reach a zipper merge with every foe arriving
+    at least ``headway_s`` before t, or after t: at least ``headway_s`` after, or at all when the foe
+    can give way (``gives_way``, a bool per arrival; default none can). That is t_e itself, or
+    ``headway_s`` after one of the foes."""
+    a = np.asarray(arrivals, float).reshape(-1)
+    g = np.zeros(len(a), bool) if gives_way is None else np.asarray(gives_way, bool).reshape(-1)
+    for t in (t_e, *np.sort(a[a + headway_s > t_e] + headway_s)):
+        clash = (np.abs(a - t) < headway_s - 1e-9) & ~(g & (a > t))
+        if not clash.any():
             return float(t)
     return math.inf  # unreachable: the last candidate is always free
+
+
+def can_give_way(x_m, v_mps, decel_mps2: float):
+    """Whether a foe x metres before the conflict point at speed v could still stop before it
+    braking at ``decel_mps2`` (elementwise)."""
+    v = np.asarray(v_mps, float)
+    return v * v / (2.0 * decel_mps2) <= np.asarray(x_m, float)
 
 
 def rows_by_lane(lanes) -> dict[str, list[int]]:
@@ -85,9 +101,10 @@ def rows_by_lane(lanes) -> dict[str, list[int]]:
 
 
 def foe_arrivals(foes: tuple[FoeLink, ...], signals, lanes: dict[str, list[int]], lane_pos, speed, length,
-                 exclude: set[int]) -> list[tuple[float, int]]:
-    """(arrival time t_f at its conflict point, s; row) of every vehicle of an open foe link that
-    has not passed it. ``lanes`` maps lane ids to rows of the arrays ``lane_pos``, ``speed``, ``length``."""
+                 exclude: set[int]) -> list[tuple[float, int, float]]:
+    """(arrival time t_f at its conflict point, s; row; distance x of its front bumper to it, m) of
+    every vehicle of an open foe link that has not passed it. ``lanes`` maps lane ids to rows of the
+    arrays ``lane_pos``, ``speed``, ``length``."""
     out = []
     for foe in foes:
         if link_state(signals, foe.tls, foe.link_index, foe.state) in CLOSED:
@@ -97,14 +114,16 @@ def foe_arrivals(foes: tuple[FoeLink, ...], signals, lanes: dict[str, list[int]]
                 x = offset - float(lane_pos[r])
                 if r in exclude or not x > -float(length[r]):
                     continue
-                out.append((max(x, 0.0) / max(float(speed[r]), V_FLOOR_MPS), r))
+                out.append((max(x, 0.0) / max(float(speed[r]), V_FLOOR_MPS), r, x))
     return out
 
 
 def foe_arrival(foes: tuple[FoeLink, ...], signals, lanes: dict[str, list[int]], lane_pos, speed, length,
-                exclude: set[int]) -> tuple[float, int]:
-    """(earliest arrival time t_f of :func:`foe_arrivals`, s; its row), or (inf, -1)."""
-    return min(foe_arrivals(foes, signals, lanes, lane_pos, speed, length, exclude), default=(math.inf, -1),
+                exclude: set[int], skip=None) -> tuple[float, int]:
+    """(earliest arrival time t_f of :func:`foe_arrivals`, s; its row), or (inf, -1); ``skip(t, row,
+    x)`` leaves arrivals out (e.g. zipper foes that can give way)."""
+    arr = foe_arrivals(foes, signals, lanes, lane_pos, speed, length, exclude)
+    return min(((t, r) for t, r, x in arr if skip is None or not skip(t, r, x)), default=(math.inf, -1),
                key=lambda a: a[0])
 
 

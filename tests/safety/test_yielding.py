@@ -16,6 +16,7 @@ from sumo_avoid.core.types import FoeLink, RouteLink
 from sumo_avoid.rollout import runner
 from sumo_avoid.safety.rules import RulesParams
 from sumo_avoid.safety.yielding import (
+    can_give_way,
     critical_gap_s,
     ego_time_to_line,
     foe_arrival,
@@ -50,6 +51,16 @@ def test_zipper_slot_by_hand():
     assert zipper_slot(3.0, [0.5, 5.5], h) == 3.0  # 2.5 s after one and before the next
     assert zipper_slot(3.0, [2.0, 4.5], h) == 6.5  # 2.0 and 4.5 too close: behind the second
     assert zipper_slot(3.0, [2.0, 4.0, 7.0, 9.5], h) == 11.5  # 6.0 is 1 s before 7.0, 9.0 0.5 s before 9.5
+    # a foe behind the slot that can give way lets the ego in; one ahead of it never does
+    assert zipper_slot(3.0, [2.0, 4.5], h, [False, True]) == 4.0  # 2 s behind the first, the second lets it in
+    assert zipper_slot(3.0, [2.0, 4.5], h, [True, False]) == 6.5  # the first is ahead: giving way does not apply
+    assert zipper_slot(3.0, [3.5], h, [True]) == 3.0  # arrives after the ego: lets it in now
+    assert zipper_slot(3.0, [2.5], h, [True]) == 4.5  # arrives before the ego: it goes first
+
+
+def test_can_give_way_by_hand():
+    # 10 m/s at 3 m/s^2 needs 100 / 6 = 16.67 m
+    assert can_give_way([16.7, 16.6, 0.0], [10.0, 10.0, 0.0], 3.0).tolist() == [True, False, True]
 
 
 def test_foe_arrival_by_hand():
