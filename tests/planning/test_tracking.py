@@ -1,17 +1,19 @@
 """The radar obstacle map (shadow, face, cells, new-obstacle test) and the pure-pursuit tracker,
 pinned to hand-computed values."""
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+from sumo_avoid.core.types import Detections
 from sumo_avoid.planning.pursuit import (
     cone_gap,
     corner_angles,
     corridor_gap,
     pursuit_velocity,
 )
-from sumo_avoid.planning.radar_map import RadarMap
+from sumo_avoid.planning.radar_map import RadarMap, static_returns
 
 
 def test_a_return_marks_its_shadow_and_face():
@@ -85,3 +87,17 @@ def test_governor_gaps_ahead_of_the_front_bumper():
     assert cone_gap(pts, [0.0, 0.0], 0.0, 2.0, math.radians(30)) == pytest.approx(math.hypot(6, 3) - 2)
     assert cone_gap(pts, [0.0, 0.0], 0.0, 2.0, math.radians(20)) == pytest.approx(math.hypot(10, 1) - 2)
     assert cone_gap(np.zeros((0, 2)), [0.0, 0.0], 0.0, 2.0, 1.0) == math.inf
+
+
+def test_static_returns_leave_out_side_on_returns_on_a_road():
+    """A return abeam of the ego (its line of sight 85 deg off the road) closes at ~0 m/s whether it
+    stands or passes: on a road (min_cos 0.3) it is left out; straight ahead, 0 m/s is a standing
+    object and 20 m/s receding is traffic."""
+    rows = np.array([[20.0, 0.0, 0.0], [3.0, 85.0, 0.0], [30.0, 0.0, 20.0]])  # range, azimuth deg, radial speed
+    det = Detections(0.0, ("ego",), np.zeros((1, 2)), np.zeros(1), np.zeros((1, 2)), np.zeros(3, int),
+                     rows[:, 0], np.radians(rows[:, 1]), rows[:, 2])
+    obs = SimpleNamespace(detections=(det,))
+    pts, src = static_returns(obs, "ego", 1.0, along=0.0, min_cos=0.3)
+    assert pts.tolist() == [[20.0, 0.0]] and src.tolist() == [[0.0, 0.0]]
+    pts, _ = static_returns(obs, "ego", 1.0, along=0.0, min_cos=0.0)  # the arena's choice: kept
+    assert np.allclose(pts, [[20.0, 0.0], [3.0 * np.cos(np.radians(85.0)), 3.0 * np.sin(np.radians(85.0))]])
