@@ -52,6 +52,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sumo_avoid.control import formation_field as ff
+from sumo_avoid.control import formation_shield as shield
 from sumo_avoid.core.config import FieldError, field_doc
 from sumo_avoid.core.geometry import (
     convex_distance,
@@ -104,6 +105,10 @@ class FormationParams:
     behind: float = field_doc(1.0, doc="W_max also counts obstacles beside the formation's rows: this fraction "
                                        "of its depth behind the leader, 1")
     sense_radius_m: float = field_doc(40.0, positive=True, doc="truth: the leader knows obstacles within this range, m")
+    shield_k_ps: float = field_doc(0.5, positive=True, doc="safety shield: approach speed to a hazard at most this "
+                                                          "times the free distance beyond the margin, 1/s")
+    shield_margin_m: float = field_doc(0.3, doc="safety shield: free distance kept to obstacles (disc of the half "
+                                                "diagonal) and vehicles (footprints), m")
     v2v_gate_m: float = field_doc(4.0, positive=True, doc="radar: a return this close to a member's V2V position "
                                                           "is that member and is dropped, m")
     delay_s: float = field_doc(0.0, doc="V2V: members' states arrive this late, s")
@@ -193,10 +198,11 @@ class FormationController:
 
     # --- obstacles -------------------------------------------------------------------------------
     def _obstacles(self, obs: Observation, lead_row, member_pos):
-        """(polys (O,K,2), mask (E,O) which ego feels which, leader's (O,) bool). The leader's list is
-        shared with every member (V2V); radar returns of a follower only with itself."""
+        """(polys (O,K,2), mask (E,O) which ego feels which, leader's (O,) bool, static (O,) bool,
+        velocities (O,2)). The leader's list is shared with every member (V2V); radar returns of a
+        follower only with itself."""
         snap, E = obs.snapshot, len(obs.ego_ids)
-        parts, owner = [], []  # owner -1: the leader's list (everyone)
+        parts, owner, vel = [], [], []  # owner -1: the leader's list (everyone)
         if obs.detections is None:  # around the leader; once it has left, around every member
             where = snap.pos[[lead_row]] if lead_row is not None else snap.pos[obs.ego_rows]
             r = self.p.sense_radius_m
@@ -205,24 +211,29 @@ class FormationController:
                         - self._static_r <= r)
                 parts.append(self._static_polys[near])
                 owner += [-1] * int(near.sum())
+                vel.append(np.full((int(near.sum()), 2), np.nan))  # NaN: a static obstacle
             members = set(self.order)
             o = np.array([k for k, v in enumerate(snap.ids) if v not in members], int)
             if len(o):
                 o = o[np.hypot(*(snap.pos[o][:, None] - where[None]).transpose(2, 0, 1)).min(axis=1) <= r]
                 parts.append(footprint_corners(snap.pos[o], snap.heading[o], snap.length[o], snap.width[o]))
                 owner += [-1] * len(o)
+                vel.append(snap.vel[o])
         else:
-            corners, _, who = radar_obstacles(obs, member_pos, self.p.v2v_gate_m)
+            corners, rv, who = radar_obstacles(obs, member_pos, self.p.v2v_gate_m)
             lead_k = obs.ego_ids.index(snap.ids[lead_row]) if lead_row is not None else -2
             parts.append(corners)
+            vel.append(rv)
             owner += [-1 if w == lead_k else int(w) for w in who]
         parts = [x for x in parts if len(x)]
         if not parts:
-            return np.zeros((0, 4, 2)), np.zeros((E, 0), bool), np.zeros(0, bool)
+            return np.zeros((0, 4, 2)), np.zeros((E, 0), bool), np.zeros(0, bool), np.zeros(0, bool), np.zeros((0, 2))
         polys = pad_polygons([pg for part in parts for pg in part])
         owner = np.asarray(owner)
         mask = (owner[None, :] == -1) | (owner[None, :] == np.arange(E)[:, None])
-        return polys, mask, owner == -1
+        vel = np.concatenate([x for x in vel if len(x)]).reshape(-1, 2)
+        static = np.isnan(vel[:, 0])
+        return polys, mask, owner == -1, static, np.where(static[:, None], 0.0, vel)
 
     def _repulsion(self, pos, heading, length, width, goal, polys, mask) -> np.ndarray:
         """Reshaped goal-aware repulsion (E,2) of each ego from the obstacles it feels."""
@@ -258,6 +269,33 @@ class FormationController:
         k = np.where(rho <= p.rho0_member_m, 1.0 / rho - 1.0 / p.rho0_member_m, 0.0)
         f = (p.k_member * k / rho**2)[:, None] * away
         return np.column_stack([np.bincount(i, f[:, 0], E), np.bincount(i, f[:, 1], E)])
+
+    def _shield(self, v, pos, heading, length, width, nb_pos, nb_vel, haz) -> np.ndarray:
+        """The velocity barrier (:mod:`.formation_shield`) on the commands v (E,2): static obstacles
+        against each member's disc, other vehicles and the other members footprint to footprint (members:
+        relative to the other's V2V velocity, each taking half of the allowed approach)."""
+        p, E = self.p, len(v)
+        polys, mask, static, hvel = haz
+        ego = footprint_corners(pos, heading, length, width)
+        ns, bs = [np.zeros((E, 0, 2))], [np.zeros((E, 0))]
+        if static.any():
+            sp = polys[static]
+            n, gap = shield.disc_hazards(pos, 0.5 * np.hypot(length, width), sp, sp.mean(axis=1))
+            ns.append(n)
+            bs.append(np.where(mask[:, static], shield.approach_bounds(n, gap, p.shield_margin_m, p.shield_k_ps),
+                               -np.inf))
+        if (~static).any():
+            veh = polys[~static]
+            n, gap = shield.footprint_hazards(ego, veh, pos, veh.mean(axis=1))
+            ns.append(n)
+            bs.append(np.where(mask[:, ~static], shield.approach_bounds(n, gap, p.shield_margin_m, p.shield_k_ps,
+                                                                        hvel[~static]), -np.inf))
+        if E > 1:
+            n, gap = shield.footprint_hazards(ego, footprint_corners(nb_pos, heading, length, width), pos, nb_pos)
+            b = shield.approach_bounds(n, gap, p.shield_margin_m, p.shield_k_ps, nb_vel, share=0.5)
+            ns.append(n)
+            bs.append(np.where(np.eye(E, dtype=bool), -np.inf, b))
+        return shield.barrier(v, np.concatenate(ns, axis=1), np.concatenate(bs, axis=1))
 
     # --- mode --------------------------------------------------------------------------------------
     def _mode(self, lead_pos, goal, polys, lead_only, rel_lon, rel_lat, length, width, t) -> None:
@@ -321,7 +359,8 @@ class FormationController:
         goals = np.array([self.tasks[v].goal for v in ids], float).reshape(-1, 2)
         leader = self.order[0] if self.order else None
         lk = ids.index(leader) if leader in ids else None
-        polys, mask, lead_only = self._obstacles(obs, rows[lk] if lk is not None else None, nb_pos)
+        polys, mask, lead_only, static, hvel = self._obstacles(obs, rows[lk] if lk is not None else None, nb_pos)
+        haz = (polys, mask, static, hvel)
         rep = self._repulsion(own_pos, heading, length, width, goals, polys, mask)
         out = np.zeros((len(ids), 2))
         member = self._member_repulsion(own_pos, nb_pos, heading, length, width)
@@ -331,7 +370,8 @@ class FormationController:
         field_v = _unit(field)[0] * cruise[:, None]
         if lk is None:  # the leader is done: each follower drives the field to its own goal
             v = np.array([forward_cone(f, h, np.radians(p.max_turn_deg)) for f, h in zip(field_v, heading)]) + member
-            return v * np.minimum(1.0, p.follower_max_speed_mps / np.maximum(np.hypot(*v.T), 1e-9))[:, None]
+            v = v * np.minimum(1.0, p.follower_max_speed_mps / np.maximum(np.hypot(*v.T), 1e-9))[:, None]
+            return self._shield(v, own_pos, heading, length, width, nb_pos, nb_vel, haz)
         if self.frame is None:
             self.frame = float(heading[lk])
         # the frame turns with the leader's heading, low-passed, and only as fast as the leader moves
@@ -360,4 +400,4 @@ class FormationController:
         v = nb_vel[lk] + gain * err + rep + member
         v = v * np.minimum(1.0, p.follower_max_speed_mps / np.maximum(np.hypot(*v.T), 1e-9))[:, None]
         out[fol] = v[fol]
-        return out
+        return self._shield(out, own_pos, heading, length, width, nb_pos, nb_vel, haz)
