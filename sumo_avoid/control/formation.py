@@ -271,31 +271,8 @@ class FormationController:
         return np.column_stack([np.bincount(i, f[:, 0], E), np.bincount(i, f[:, 1], E)])
 
     def _shield(self, v, pos, heading, length, width, nb_pos, nb_vel, haz) -> np.ndarray:
-        """The velocity barrier (:mod:`.formation_shield`) on the commands v (E,2): static obstacles
-        against each member's disc, other vehicles and the other members footprint to footprint (members:
-        relative to the other's V2V velocity, each taking half of the allowed approach)."""
-        p, E = self.p, len(v)
-        polys, mask, static, hvel = haz
-        ego = footprint_corners(pos, heading, length, width)
-        ns, bs = [np.zeros((E, 0, 2))], [np.zeros((E, 0))]
-        if static.any():
-            sp = polys[static]
-            n, gap = shield.disc_hazards(pos, 0.5 * np.hypot(length, width), sp, sp.mean(axis=1))
-            ns.append(n)
-            bs.append(np.where(mask[:, static], shield.approach_bounds(n, gap, p.shield_margin_m, p.shield_k_ps),
-                               -np.inf))
-        if (~static).any():
-            veh = polys[~static]
-            n, gap = shield.footprint_hazards(ego, veh, pos, veh.mean(axis=1))
-            ns.append(n)
-            bs.append(np.where(mask[:, ~static], shield.approach_bounds(n, gap, p.shield_margin_m, p.shield_k_ps,
-                                                                        hvel[~static]), -np.inf))
-        if E > 1:
-            n, gap = shield.footprint_hazards(ego, footprint_corners(nb_pos, heading, length, width), pos, nb_pos)
-            b = shield.approach_bounds(n, gap, p.shield_margin_m, p.shield_k_ps, nb_vel, share=0.5)
-            ns.append(n)
-            bs.append(np.where(np.eye(E, dtype=bool), -np.inf, b))
-        return shield.barrier(v, np.concatenate(ns, axis=1), np.concatenate(bs, axis=1))
+        ego = shield.Members(pos, heading, length, width, nb_pos, nb_vel)
+        return shield.apply(v, ego, *haz, self.p.shield_margin_m, self.p.shield_k_ps)
 
     # --- mode --------------------------------------------------------------------------------------
     def _mode(self, lead_pos, goal, polys, lead_only, rel_lon, rel_lat, length, width, t) -> None:

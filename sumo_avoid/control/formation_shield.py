@@ -26,9 +26,21 @@ Two hazard models (see :func:`disc_hazards`, :func:`footprint_hazards`):
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
-from sumo_avoid.core.geometry import convex_distance
+from sumo_avoid.core.geometry import convex_distance, footprint_corners
+
+
+class Members(NamedTuple):
+    """The members' own poses (E, 2) / (E,) and the others' V2V positions and velocities (E, 2)."""
+    pos: np.ndarray
+    heading: np.ndarray
+    length: np.ndarray
+    width: np.ndarray
+    nb_pos: np.ndarray
+    nb_vel: np.ndarray
 
 
 def _unit(v):
@@ -89,3 +101,29 @@ def approach_bounds(n, gap, margin_m: float, k_ps: float, hazard_vel=None, share
     if hazard_vel is not None:
         b = b + np.einsum("eoj,oj->eo", n, np.asarray(hazard_vel, float).reshape(-1, 2))
     return b
+
+
+def apply(v, m: Members, polys, mask, static, hazard_vel, margin_m: float, k_ps: float) -> np.ndarray:
+    """The shield on the members' commands v (E, 2): static obstacles (``static`` (O,) of polys
+    (O, K, 2)) against each member's disc, other vehicles footprint to footprint relative to their
+    velocities (``hazard_vel`` (O, 2)), each hazard only for the members that know it (``mask``
+    (E, O)), and the other members footprint to footprint relative to their V2V velocity, each
+    member taking half of the allowed approach."""
+    E = len(v)
+    ego = footprint_corners(m.pos, m.heading, m.length, m.width)
+    ns, bs = [np.zeros((E, 0, 2))], [np.zeros((E, 0))]
+    if static.any():
+        sp = polys[static]
+        n, gap = disc_hazards(m.pos, 0.5 * np.hypot(m.length, m.width), sp, sp.mean(axis=1))
+        ns.append(n)
+        bs.append(np.where(mask[:, static], approach_bounds(n, gap, margin_m, k_ps), -np.inf))
+    if (~static).any():
+        veh = polys[~static]
+        n, gap = footprint_hazards(ego, veh, m.pos, veh.mean(axis=1))
+        ns.append(n)
+        bs.append(np.where(mask[:, ~static], approach_bounds(n, gap, margin_m, k_ps, hazard_vel[~static]), -np.inf))
+    if E > 1:
+        n, gap = footprint_hazards(ego, footprint_corners(m.nb_pos, m.heading, m.length, m.width), m.pos, m.nb_pos)
+        ns.append(n)
+        bs.append(np.where(np.eye(E, dtype=bool), -np.inf, approach_bounds(n, gap, margin_m, k_ps, m.nb_vel, 0.5)))
+    return barrier(v, np.concatenate(ns, axis=1), np.concatenate(bs, axis=1))
