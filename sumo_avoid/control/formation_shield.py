@@ -32,6 +32,9 @@ import numpy as np
 
 from sumo_avoid.core.geometry import convex_distance, footprint_corners
 
+#: heading_cap never slows a car below this, m/s.
+CREEP_MPS = 0.5
+
 
 class Members(NamedTuple):
     """The members' own poses (E, 2) / (E,) and the others' V2V positions and velocities (E, 2)."""
@@ -103,12 +106,32 @@ def approach_bounds(n, gap, margin_m: float, k_ps: float, hazard_vel=None, share
     return b
 
 
-def apply(v, m: Members, polys, mask, static, hazard_vel, margin_m: float, k_ps: float) -> np.ndarray:
+def heading_cap(v, heading, n, bound, creep_mps: float = CREEP_MPS) -> np.ndarray:
+    """A car moves along its heading (the kinematic actuator drives the desired velocity's component
+    along it, v . h, while it turns): the commands v (E, 2) scaled down so that this component keeps
+    every constraint, sigma (h . n_c) >= bound_c, i.e. sigma <= bound_c / (h . n_c) where the heading
+    points at the hazard (h . n_c < 0); never below ``creep_mps`` (a car turns only while it moves:
+    at 0 one facing a hazard could never turn away)."""
+    h = np.column_stack([np.cos(heading), np.sin(heading)])
+    hn = np.einsum("ecj,ej->ec", n, h)
+    towards = (hn < -1e-9) & np.isfinite(bound)
+    cap = np.min(np.where(towards, np.maximum(bound, -1e12) / np.where(towards, hn, -1.0), np.inf), axis=1,
+                 initial=np.inf)
+    cap = np.maximum(cap, creep_mps)
+    sigma = np.einsum("ej,ej->e", v, h)
+    f = np.where(sigma > cap, cap / np.maximum(sigma, 1e-12), 1.0)
+    return v * f[:, None]
+
+
+def apply(v, m: Members, polys, mask, static, hazard_vel, margin_m: float, k_ps: float, extra=None) -> np.ndarray:
     """The shield on the members' commands v (E, 2): static obstacles (``static`` (O,) of polys
     (O, K, 2)) against each member's disc, other vehicles footprint to footprint relative to their
     velocities (``hazard_vel`` (O, 2)), each hazard only for the members that know it (``mask``
     (E, O)), and the other members footprint to footprint relative to their V2V velocity, each
-    member taking half of the allowed approach."""
+    member taking half of the allowed approach; ``extra``: further (n (E, C, 2), bounds (E, C)), e.g. a
+    road's bounds ((n = (0, 1), (0, -1)) in the route frame: the right and the left bound), then
+    :func:`heading_cap` on the other constraints (the cap would stop a car that faces the road's edge),
+    then the bounds once more, exactly, as limits on d_dot."""
     E = len(v)
     ego = footprint_corners(m.pos, m.heading, m.length, m.width)
     ns, bs = [np.zeros((E, 0, 2))], [np.zeros((E, 0))]
@@ -126,4 +149,13 @@ def apply(v, m: Members, polys, mask, static, hazard_vel, margin_m: float, k_ps:
         n, gap = footprint_hazards(ego, footprint_corners(m.nb_pos, m.heading, m.length, m.width), m.pos, m.nb_pos)
         ns.append(n)
         bs.append(np.where(np.eye(E, dtype=bool), -np.inf, approach_bounds(n, gap, margin_m, k_ps, m.nb_vel, 0.5)))
-    return barrier(v, np.concatenate(ns, axis=1), np.concatenate(bs, axis=1))
+    n, b = np.concatenate(ns, axis=1), np.concatenate(bs, axis=1)
+    if extra is None:
+        return barrier(v, n, b)
+    v = heading_cap(barrier(v, np.concatenate([extra[0], n], axis=1), np.concatenate([extra[1], b], axis=1)),
+                    m.heading, n, b)
+    # the road wins: a car squeezed between a vehicle and the edge brakes (the cap), it does not leave
+    # the road; the bounds' normals are +-d, so their constraints bound d_dot from below and above
+    lo, hi = extra[1][:, 0], -extra[1][:, 1]
+    v[:, 1] = np.where(lo <= hi, np.clip(v[:, 1], lo, hi), 0.5 * (lo + hi))
+    return v

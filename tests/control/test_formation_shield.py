@@ -57,3 +57,18 @@ def test_barrier_two_walls_corner():
     n2 = np.array([[[-1.0, 0.0], [-np.sqrt(0.5), -np.sqrt(0.5)]]])
     v = sh.barrier(np.array([[3.0, 1.0]]), n2, np.zeros((1, 2)))
     assert (np.einsum("ecj,ej->ec", n2, v) >= -1e-9).all()
+
+
+def test_heading_cap_by_hand():
+    # a car heading +x (h = (1, 0)) with a hazard ahead (n = (-1, 0)) that allows 2 m/s of approach:
+    # the command (5, 3) drives 5 m/s along the heading -> scaled by 2/5 to (2, 1.2)
+    n, b = np.array([[[-1.0, 0.0]]]), np.array([[-2.0]])
+    assert sh.heading_cap(np.array([[5.0, 3.0]]), np.array([0.0]), n, b) == pytest.approx(np.array([[2.0, 1.2]]))
+    # heading 60 deg at the same hazard: h . n = -0.5, sigma <= 4; command along the heading at 6 m/s -> 4
+    v = 6.0 * np.array([[0.5, np.sqrt(0.75)]])
+    assert sh.heading_cap(v, np.array([np.pi / 3]), n, b) == pytest.approx(v * 4.0 / 6.0)
+    # a hazard behind (h . n > 0): untouched; a bound that asks the car to back off (b > 0): the creep
+    # speed (0.5 m/s), no reversing, and the car can still turn
+    assert sh.heading_cap(np.array([[5.0, 0.0]]), np.array([np.pi]), n, b) == pytest.approx(np.array([[5.0, 0.0]]))
+    assert sh.heading_cap(np.array([[5.0, 0.0]]), np.array([0.0]), n, np.array([[1.0]])) == pytest.approx(
+        np.array([[0.5, 0.0]]))
