@@ -98,6 +98,7 @@ class FormationParams:
                                          "own) or 'trail' (each follows the leader's path)")
     behind: float = field_doc(1.0, doc="W_max also counts obstacles beside the formation's rows: this fraction "
                                        "of its depth behind the leader, 1")
+    predict_s: float = field_doc(0.0, doc="truth: other vehicles count as the box they sweep in this time, s")
     sense_radius_m: float = field_doc(40.0, positive=True, doc="truth: the leader knows obstacles within this range, m")
     shield_k_ps: float = field_doc(0.5, positive=True, doc="safety shield: approach speed to a hazard at most this "
                                                           "times the free distance beyond the margin, 1/s")
@@ -174,7 +175,6 @@ class FormationController:
         self._static_c = np.array([o.mean(axis=0) for o in self.static]).reshape(-1, 2)
         self._static_r = np.array([np.hypot(*(o - o.mean(axis=0)).T).max() for o in self.static])
 
-    # --- protocol --------------------------------------------------------------------------------
     def v2v_params(self) -> V2VParams:
         p = self.p
         return V2VParams(p.delay_s, p.pos_noise_m, p.vel_noise_mps, 0.0, 0.1, 0.0)
@@ -202,8 +202,8 @@ class FormationController:
         follower only with itself."""
         snap, E = obs.snapshot, len(obs.ego_ids)
         parts, owner, vel = [], [], []  # owner -1: the leader's list (everyone)
-        if obs.detections is None:  # around the leader; once it has left, around every member
-            where = snap.pos[[lead_row]] if lead_row is not None else snap.pos[obs.ego_rows]
+        if obs.detections is None:  # around the leader; on a road or once it has left, around every member
+            where = snap.pos[[lead_row]] if lead_row is not None and self.road is None else snap.pos[obs.ego_rows]
             r = self.p.sense_radius_m
             if len(self.static):
                 near = (np.hypot(*(self._static_c[:, None] - where[None]).transpose(2, 0, 1)).min(axis=1)
@@ -215,7 +215,9 @@ class FormationController:
             o = np.array([k for k, v in enumerate(snap.ids) if v not in members], int)
             if len(o):
                 o = o[np.hypot(*(snap.pos[o][:, None] - where[None]).transpose(2, 0, 1)).min(axis=1) <= r]
-                parts.append(footprint_corners(snap.pos[o], snap.heading[o], snap.length[o], snap.width[o]))
+                ahead = self.p.predict_s * snap.vel[o]  # each as the box it sweeps within predict_s
+                parts.append(footprint_corners(snap.pos[o] + 0.5 * ahead, snap.heading[o],
+                                               snap.length[o] + np.hypot(*ahead.T), snap.width[o]))
                 owner += [-1] * len(o)
                 vel.append(snap.vel[o])
         else:
@@ -314,7 +316,6 @@ class FormationController:
         self.last = {"gap_centre": 0.5 * (gap_lo + gap_hi), "gamma": gamma, "W": W, "W_now": ff.formation_width(rel_lat, width), "W_max": W_max,
                      "gamma_min": g_min, "kappa": self.kappa}
 
-    # --- the leader's trail (kappa 3) ---------------------------------------------------------------
     def _extend_trail(self, pos) -> None:
         if not len(self.trail):
             self.trail = np.array([[pos[0], pos[1], 0.0]])
@@ -332,20 +333,19 @@ class FormationController:
 
     # --- one step ----------------------------------------------------------------------------------
     def act(self, obs: Observation) -> np.ndarray:
-        goals = np.array([self.tasks[v].goal for v in obs.ego_ids], float).reshape(-1, 2)
+        ids, goals = obs.ego_ids, np.array([self.tasks[v].goal for v in obs.ego_ids], float).reshape(-1, 2)
         leader = self.order[0] if self.order else None
-        if not self._on_road or leader not in obs.ego_ids:
-            if self.road is None:
-                return self._act(obs, goals)
-            return np.zeros((len(obs.ego_ids), 2))  # the leader has left the road: the formation is done
+        if not self._on_road or (self.road is None and leader not in ids):
+            return self._act(obs, goals)
         if self.road is None:
             self.road = RoadFrame(self.tasks[leader])
             self._set_static(self.road.polygons(self.static))
-        fobs = self.road.enter(obs, obs.ego_rows[obs.ego_ids.index(leader)])
+        lk = ids.index(leader) if leader in ids else None  # once the leader has left: the frame at a follower
+        fobs = self.road.enter(obs, obs.ego_rows[0 if lk is None else lk])
         goals = self.road.to_frenet(goals, self.road.s_lead)
-        lk = obs.ego_ids.index(leader)
-        goals[lk] = self.road.carrot(fobs.snapshot.pos[obs.ego_rows[lk]], goals[lk], self.p.carrot_m,
-                                     self.last.get("gap_centre", 0.0))
+        if lk is not None:
+            goals[lk] = self.road.carrot(fobs.snapshot.pos[obs.ego_rows[lk]], goals[lk], self.p.carrot_m,
+                                         self.last.get("gap_centre", 0.0))
         return self.road.leave(fobs, self._act(fobs, goals))
 
     def _act(self, obs: Observation, goals) -> np.ndarray:

@@ -67,8 +67,10 @@ def test_heading_cap_by_hand():
     # heading 60 deg at the same hazard: h . n = -0.5, sigma <= 4; command along the heading at 6 m/s -> 4
     v = 6.0 * np.array([[0.5, np.sqrt(0.75)]])
     assert sh.heading_cap(v, np.array([np.pi / 3]), n, b) == pytest.approx(v * 4.0 / 6.0)
-    # a hazard behind (h . n > 0): untouched; a bound that asks the car to back off (b > 0): the creep
-    # speed (0.5 m/s), no reversing, and the car can still turn
+    # a hazard behind (h . n > 0): untouched; one faced at an allowed approach of 0.1 m/s: the creep
+    # speed 0.5 m/s (to turn away); one faced within the margin (b >= 0): 0
     assert sh.heading_cap(np.array([[5.0, 0.0]]), np.array([np.pi]), n, b) == pytest.approx(np.array([[5.0, 0.0]]))
-    assert sh.heading_cap(np.array([[5.0, 0.0]]), np.array([0.0]), n, np.array([[1.0]])) == pytest.approx(
+    assert sh.heading_cap(np.array([[5.0, 0.0]]), np.array([0.0]), n, np.array([[-0.1]])) == pytest.approx(
         np.array([[0.5, 0.0]]))
+    assert sh.heading_cap(np.array([[5.0, 0.0]]), np.array([0.0]), n, np.array([[1.0]])) == pytest.approx(
+        np.zeros((1, 2)))
