@@ -98,7 +98,7 @@ class FormationParams:
                                          "own) or 'trail' (each follows the leader's path)")
     behind: float = field_doc(1.0, doc="W_max also counts obstacles beside the formation's rows: this fraction "
                                        "of its depth behind the leader, 1")
-    predict_s: float = field_doc(0.0, doc="truth: other vehicles count as the box they sweep in this time, s")
+    predict_s: float = field_doc(0.0, doc="truth: other vehicles count as the (still) box they sweep in this time, s")
     sense_radius_m: float = field_doc(40.0, positive=True, doc="truth: the leader knows obstacles within this range, m")
     shield_k_ps: float = field_doc(0.5, positive=True, doc="safety shield: approach speed to a hazard at most this "
                                                           "times the free distance beyond the margin, 1/s")
@@ -219,7 +219,7 @@ class FormationController:
                 parts.append(footprint_corners(snap.pos[o] + 0.5 * ahead, snap.heading[o],
                                                snap.length[o] + np.hypot(*ahead.T), snap.width[o]))
                 owner += [-1] * len(o)
-                vel.append(snap.vel[o])
+                vel.append(snap.vel[o] * (self.p.predict_s <= 0))  # a swept box stands still
         else:
             corners, rv, who = radar_obstacles(obs, member_pos, self.p.v2v_gate_m)
             lead_k = obs.ego_ids.index(snap.ids[lead_row]) if lead_row is not None else -2

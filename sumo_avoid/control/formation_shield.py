@@ -111,15 +111,15 @@ def heading_cap(v, heading, n, bound, creep_mps: float = CREEP_MPS) -> np.ndarra
     along it, v . h, while it turns): the commands v (E, 2) scaled down so that this component keeps
     every constraint, sigma (h . n_c) >= bound_c, i.e. sigma <= bound_c / (h . n_c) where the heading
     points at the hazard (h . n_c < 0); not below ``creep_mps`` (a car turns only while it moves: at
-    0 one facing a hazard could never turn away) unless a hazard it faces is within the margin
-    already (bound >= 0): then 0, and the car backs off (the actuator reverses towards a command
+    0 one facing a hazard could never turn away) unless a hazard it faces (h . n < -0.5) is within
+    the margin already (bound >= 0): then 0, and the car backs off (the actuator reverses towards a command
     behind it) or waits."""
     h = np.column_stack([np.cos(heading), np.sin(heading)])
     hn = np.einsum("ecj,ej->ec", n, h)
     towards = (hn < -1e-9) & np.isfinite(bound)
     cap = np.min(np.where(towards, np.maximum(bound, -1e12) / np.where(towards, hn, -1.0), np.inf), axis=1,
                  initial=np.inf)
-    room = ~(towards & (bound >= 0.0)).any(axis=1)  # no hazard it faces is already within the margin
+    room = ~((hn < -0.5) & (bound >= 0.0)).any(axis=1)  # no hazard it faces (within 60 deg) is within the margin
     cap = np.maximum(cap, np.where(room, creep_mps, 0.0))
     sigma = np.einsum("ej,ej->e", v, h)
     f = np.where(sigma > cap, cap / np.maximum(sigma, 1e-12), 1.0)

@@ -67,8 +67,9 @@ def test_road_diamond_keeps_its_lanes_on_the_free_road():
     t = res.traj[res.traj["is_ego"] & (res.traj["time_s"] == 6.0)].set_index("id")
     # the diamond: f1, f2 one slot (15 m) behind the leader, a lane (3.5 m) to its right and left, f3 two
     # slots behind, each within 1 m (measured at 6 s: 0.7 m at most; from ~8 s the flow from behind
-    # reaches f3, whose shield moves it aside); the leader drives 18 m/s (straight road: x along, y across)
-    assert t.loc["f0", "speed"] == pytest.approx(18.0, abs=0.5)
+    # reaches f3, whose shield moves it aside); the leader (18 m/s, slower while the followers lag) made good
+    # progress (straight road: x along, y across)
+    assert t.loc["f0", "x"] - 97.75 > 6.0 * 15.0  # from its start (front bumper at 100 m) at >= 15 m/s
     for f, (dx, dy) in {"f1": (-15.0, -3.5), "f2": (-15.0, 3.5), "f3": (-30.0, 0.0)}.items():
         assert t.loc[f, "x"] - t.loc["f0", "x"] == pytest.approx(dx, abs=1.0)
         assert t.loc[f, "y"] - t.loc["f0", "y"] == pytest.approx(dy, abs=1.0)
