@@ -28,12 +28,8 @@ obstacles, other vehicles and the other members, whatever the gains. **On a road
 ``[arena]``) everything runs in the leader's route frame, the carriageway the walls
 (:mod:`.formation_road`).
 
-Sensing: the leader's obstacle list is the static obstacles and the other (non-member) vehicles
-within ``sense_radius_m`` (``ego.sensor = "truth"``), or its own radar returns as assumed boxes
-(``"radar"``, returns near a member's V2V position dropped). Followers get the leader's list and the
-members' states over V2V (Needs(v2v=True): delay and noise of the ``[controllers.formation]``
-keys); with radar each follower adds its own returns. When the leader has reached its goal (and
-left), each follower drives the leader's field to its own goal, sensing around itself.
+Sensing (truth or radar) and V2V: the leader's obstacle list goes to every member; the details,
+and what each member's shield also sees, in docs/formation.md.
 """
 from __future__ import annotations
 
@@ -98,6 +94,8 @@ class FormationParams:
                                          "own) or 'trail' (each follows the leader's path)")
     behind: float = field_doc(1.0, doc="W_max also counts obstacles beside the formation's rows: this fraction "
                                        "of its depth behind the leader, 1")
+    shield_slide: float = field_doc(0.0, doc="safety shield: a correction also slides along the hazard, this "
+                                             "fraction of it, to the left (arena; no road), 1")
     predict_s: float = field_doc(0.0, doc="truth: other vehicles count as the (still) box they sweep in this time, s")
     sense_radius_m: float = field_doc(40.0, positive=True, doc="truth: the leader knows obstacles within this range, m")
     shield_k_ps: float = field_doc(0.5, positive=True, doc="safety shield: approach speed to a hazard at most this "
@@ -176,8 +174,7 @@ class FormationController:
         self._static_r = np.array([np.hypot(*(o - o.mean(axis=0)).T).max() for o in self.static])
 
     def v2v_params(self) -> V2VParams:
-        p = self.p
-        return V2VParams(p.delay_s, p.pos_noise_m, p.vel_noise_mps, 0.0, 0.1, 0.0)
+        return V2VParams(self.p.delay_s, self.p.pos_noise_m, self.p.vel_noise_mps, 0.0, 0.1, 0.0)
 
     def add_ego(self, task: EgoTask) -> None:
         self.tasks[task.vid] = task
@@ -195,21 +192,23 @@ class FormationController:
     def tables(self) -> dict:
         return {}
 
-    # --- obstacles -------------------------------------------------------------------------------
     def _obstacles(self, obs: Observation, lead_row, member_pos):
-        """(polys (O,K,2), mask (E,O) which ego feels which, leader's (O,) bool, static (O,) bool,
-        velocities (O,2)). The leader's list is shared with every member (V2V); radar returns of a
-        follower only with itself."""
+        """(polys (O,K,2), mask (E,O) which ego's field feels which, leader's (O,) bool, static (O,) bool,
+        velocities (O,2), shield mask (E,O)). The leader's list is shared with every member (V2V); radar
+        returns of a follower only with itself; truth: what only the followers sense (beyond the
+        leader's range; arena) goes to the shield alone."""
         snap, E = obs.snapshot, len(obs.ego_ids)
         parts, owner, vel = [], [], []  # owner -1: the leader's list (everyone)
-        if obs.detections is None:  # around the leader; on a road or once it has left, around every member
-            where = snap.pos[[lead_row]] if lead_row is not None and self.road is None else snap.pos[obs.ego_rows]
-            r = self.p.sense_radius_m
+        if obs.detections is None:  # around every member (a follower 40 m behind must know what it passes)
+            where, r = snap.pos[obs.ego_rows], self.p.sense_radius_m
+            lead = snap.pos[lead_row] if lead_row is not None and self.road is None else None
             if len(self.static):
                 near = (np.hypot(*(self._static_c[:, None] - where[None]).transpose(2, 0, 1)).min(axis=1)
                         - self._static_r <= r)
                 parts.append(self._static_polys[near])
-                owner += [-1] * int(near.sum())
+                seen = np.hypot(*(self._static_c[near] - lead).T) - self._static_r[near] <= r if lead is not None \
+                    else np.ones(int(near.sum()), bool)
+                owner += np.where(seen, -1, -3).tolist()
                 vel.append(np.full((int(near.sum()), 2), np.nan))  # NaN: a static obstacle
             members = set(self.order)
             o = np.array([k for k, v in enumerate(snap.ids) if v not in members], int)
@@ -218,7 +217,8 @@ class FormationController:
                 ahead = self.p.predict_s * snap.vel[o]  # each as the box it sweeps within predict_s
                 parts.append(footprint_corners(snap.pos[o] + 0.5 * ahead, snap.heading[o],
                                                snap.length[o] + np.hypot(*ahead.T), snap.width[o]))
-                owner += [-1] * len(o)
+                owner += np.where(np.hypot(*(snap.pos[o] - lead).T) <= r, -1, -3).tolist() if lead is not None \
+                    else [-1] * len(o)
                 vel.append(snap.vel[o] * (self.p.predict_s <= 0))  # a swept box stands still
         else:
             corners, rv, who = radar_obstacles(obs, member_pos, self.p.v2v_gate_m)
@@ -228,13 +228,14 @@ class FormationController:
             owner += [-1 if w == lead_k else int(w) for w in who]
         parts = [x for x in parts if len(x)]
         if not parts:
-            return np.zeros((0, 4, 2)), np.zeros((E, 0), bool), np.zeros(0, bool), np.zeros(0, bool), np.zeros((0, 2))
+            e = np.zeros((E, 0), bool)
+            return np.zeros((0, 4, 2)), e, np.zeros(0, bool), np.zeros(0, bool), np.zeros((0, 2)), e
         polys = pad_polygons([pg for part in parts for pg in part])
         owner = np.asarray(owner)
         mask = (owner[None, :] == -1) | (owner[None, :] == np.arange(E)[:, None])
         vel = np.concatenate([x for x in vel if len(x)]).reshape(-1, 2)
         static = np.isnan(vel[:, 0])
-        return polys, mask, owner == -1, static, np.where(static[:, None], 0.0, vel)
+        return polys, mask, owner == -1, static, np.where(static[:, None], 0.0, vel), mask | (owner[None, :] == -3)
 
     def _repulsion(self, pos, heading, length, width, goal, polys, mask) -> np.ndarray:
         """Reshaped goal-aware repulsion (E,2) of each ego from the obstacles it feels."""
@@ -275,9 +276,8 @@ class FormationController:
         ego = shield.Members(pos, heading, length, width, nb_pos, nb_vel)
         walls = None if self.road is None else self.road.walls(pos, heading, length, width, self.p.shield_margin_m,
                                                                  self.p.shield_k_ps)
-        return shield.apply(v, ego, *haz, self.p.shield_margin_m, self.p.shield_k_ps, walls)
+        return shield.apply(v, ego, *haz, self.p.shield_margin_m, self.p.shield_k_ps, walls, self.p.shield_slide)
 
-    # --- mode --------------------------------------------------------------------------------------
     def _mode(self, lead_pos, goal, polys, lead_only, rel_lon, rel_lat, length, width, t) -> None:
         p = self.p
         c, s = np.cos(self.frame), np.sin(self.frame)
@@ -331,7 +331,6 @@ class FormationController:
         return np.column_stack([np.interp(s, self.trail[:, 2], self.trail[:, 0]),
                                 np.interp(s, self.trail[:, 2], self.trail[:, 1])])
 
-    # --- one step ----------------------------------------------------------------------------------
     def act(self, obs: Observation) -> np.ndarray:
         ids, goals = obs.ego_ids, np.array([self.tasks[v].goal for v in obs.ego_ids], float).reshape(-1, 2)
         leader = self.order[0] if self.order else None
@@ -355,8 +354,8 @@ class FormationController:
         heading, length, width = snap.heading[rows], snap.length[rows], snap.width[rows]
         leader = self.order[0] if self.order else None
         lk = ids.index(leader) if leader in ids else None
-        polys, mask, lead_only, static, hvel = self._obstacles(obs, rows[lk] if lk is not None else None, nb_pos)
-        haz = (polys, mask, static, hvel)
+        polys, mask, lead_only, static, hvel, smask = self._obstacles(obs, rows[lk] if lk is not None else None, nb_pos)
+        haz = (polys, smask, static, hvel)
         fmask = mask if self.road is None else self.road.field_mask(own_pos, length, width, polys, mask, lk, p.clear_m)
         rep = self._repulsion(own_pos, heading, length, width, goals, polys, fmask)
         out = np.zeros((len(ids), 2))

@@ -76,13 +76,16 @@ def footprint_hazards(own, others, own_pos, other_pos):
     return n.reshape(E, O, 2), d.reshape(E, O)
 
 
-def barrier(v, n, bound, passes: int = 20) -> np.ndarray:
+def barrier(v, n, bound, passes: int = 20, slide: float = 0.0) -> np.ndarray:
     """Velocity commands v (E, 2) changed as little as needed so that v . n[e, c] >= bound[e, c]
     for every constraint c (n (E, C, 2) unit vectors, bound (E, C) m/s; -inf = inactive).
 
     Each pass moves every ego's command onto its most violated constraint's line (Motzkin's
     relaxation method: converges to a point of the intersection of the half-planes when it is not
-    empty; in 2-D a few passes suffice); ``passes`` bounds the work. Returns (E, 2)."""
+    empty; in 2-D a few passes suffice); ``passes`` bounds the work. ``slide``: each correction also
+    adds ``slide`` times itself along n turned 90 deg to the left (the hazard's tangent; no change to
+    that constraint), so a command straight into a hazard slides round it instead of stopping dead
+    (a follower whose slot lies behind an obstacle). Returns (E, 2)."""
     v = np.array(v, float).reshape(-1, 2)
     if n.shape[1] == 0:
         return v
@@ -93,7 +96,8 @@ def barrier(v, n, bound, passes: int = 20) -> np.ndarray:
         worst = viol[rows, c]
         if not (worst > 1e-9).any():
             break
-        v += np.where(worst > 1e-9, worst, 0.0)[:, None] * n[rows, c]
+        nc = n[rows, c]
+        v += np.where(worst > 1e-9, worst, 0.0)[:, None] * (nc + slide * np.column_stack([-nc[:, 1], nc[:, 0]]))
     return v
 
 
@@ -126,7 +130,8 @@ def heading_cap(v, heading, n, bound, creep_mps: float = CREEP_MPS) -> np.ndarra
     return v * f[:, None]
 
 
-def apply(v, m: Members, polys, mask, static, hazard_vel, margin_m: float, k_ps: float, extra=None) -> np.ndarray:
+def apply(v, m: Members, polys, mask, static, hazard_vel, margin_m: float, k_ps: float, extra=None,
+          slide: float = 0.0) -> np.ndarray:
     """The shield on the members' commands v (E, 2): static obstacles (``static`` (O,) of polys
     (O, K, 2)) against each member's disc, other vehicles footprint to footprint relative to their
     velocities (``hazard_vel`` (O, 2)), each hazard only for the members that know it (``mask``
@@ -154,7 +159,7 @@ def apply(v, m: Members, polys, mask, static, hazard_vel, margin_m: float, k_ps:
         bs.append(np.where(np.eye(E, dtype=bool), -np.inf, approach_bounds(n, gap, margin_m, k_ps, m.nb_vel, 0.5)))
     n, b = np.concatenate(ns, axis=1), np.concatenate(bs, axis=1)
     if extra is None:
-        return barrier(v, n, b)
+        return barrier(v, n, b, slide=slide)
     v = heading_cap(barrier(v, np.concatenate([extra[0], n], axis=1), np.concatenate([extra[1], b], axis=1)),
                     m.heading, n, b)
     # the road wins: a car squeezed between a vehicle and the edge brakes (the cap), it does not leave
