@@ -5,44 +5,31 @@ of SPEC §3 (:mod:`.formation_field`):
 
     F = eta_at rho_g g  +  reshape_{alpha, beta}( sum over obstacles of F_re1 + F_re2 )
 
-with rho_g its distance to the goal, g the unit vector to it, F_re1 = eta_re (1/rho - 1/rho0)
-rho_g^n / rho^2 away from the obstacle, F_re2 = (n/2) eta_re (1/rho - 1/rho0)^2 rho_g^(n-1)
-towards the goal (rho = footprint-to-obstacle distance, floored at ``rho_floor_m``), and the
-vehicle-frame reshaping F_p' = (1 + alpha) F_p, F_q' = F_q + beta |F_re| that slides the
-resultant round an obstacle. It moves along F at ``leader_speed_mps`` (the seed's constant speed),
-slowing within ``slow_radius_m`` of the goal and while the followers lag behind their slots.
-Values used (documented in docs/formation.md): n = 1 (the repulsion scales with rho_g like the
-attraction, so their balance does not drift with the distance to the goal, and it vanishes at the
-goal), alpha = -0.3 (30 % less head-on push), beta = +0.3 (a push to the left of 30 % of |F_re|).
+(F_re1 away from the obstacle, F_re2 towards the goal, both ~ rho_g^n; the reshaping F_p' = (1 + alpha)
+F_p, F_q' = F_q + beta |F_re| in the vehicle frame slides the resultant round an obstacle). It moves
+along F at ``leader_speed_mps``, slowing near its goal and while the followers lag behind. Values
+(n = 1, alpha = -0.3, beta = +0.3) and why: docs/formation.md.
 
-**Followers** hold slots of a shape (:func:`.formation_field.slots`) in the formation frame: at
-the leader's position, turned by the leader's heading low-passed with ``frame_tau_s`` (the
-low-pass slowed in proportion to the leader's speed: a creeping leader does not swing the frame). Each
-follower's command is the leader's velocity (over V2V) + ``k_slot_ps`` x slot error + the same
-goal-aware repulsion (towards its own goal) + repulsion from the other members, capped at
-``follower_max_speed_mps``.
+**Followers** hold slots of a shape (:func:`.formation_field.slots`) at the leader's position,
+turned by its heading low-passed with ``frame_tau_s``: command = the leader's velocity (V2V) +
+``k_slot_ps`` x slot error + the same goal-aware repulsion + member repulsion, capped.
 
-**Mode** (SPEC §3): W = the nominal shape's width across the formation frame (its outer slots' spread +
-one vehicle width; the members' current spread would make gamma self-referential: narrowing the
-shape raises W_max / W back to 1 and the mode chatters); W_max = the
-free width across it left by the obstacles the leader knows within [-depth, ``lookahead_m``]
-along it (depth: the formation's, nominal or as strung out now, times ``behind``) (:func:`.formation_field.free_width`, centred on the leader's line); gamma = W_max / W.
-kappa = 1 keeps the shape, kappa = 2 scales it laterally so it fits W_max with ``clear_m`` each
-side, kappa = 3 (gamma <= gamma_min, from the smallest lateral scale at which neighbours keep
-``safe_gap_m``) breaks it up: each follower avoids on its own, with its own repulsion from the
-obstacles and the other members, and only a weak pull (``k_slot_broken_ps``) towards its nominal
-slot (``broken = "slots"``) or towards the leader's trail, follower j of the slot order aiming at
-the point j x ``spacing_m`` behind the leader on the path the leader took (``"trail"``); the
-shape re-forms when gamma recovers. A higher kappa is taken at
-once, a lower one only after it held for ``relax_s``; the lateral scale widens at most at
-``widen_rate_ps``.
+**Mode** (SPEC §3): gamma = W_max / W, W the nominal shape's width across the formation frame,
+W_max the free width the obstacles the leader knows leave within [-depth, ``lookahead_m``] along it,
+centred on the leader's line (:func:`.formation_field.free_width`). kappa = 1 keeps the shape,
+kappa = 2 scales it laterally to fit W_max with ``clear_m`` each side, kappa = 3 (gamma <= gamma_min,
+from ``safe_gap_m``) breaks it up: each follower avoids on its own with a weak pull
+(``k_slot_broken_ps``) to its nominal slot (``broken = "slots"``) or to the point j x ``spacing_m``
+behind the leader on the leader's path (``"trail"``). A higher kappa at once, a lower one after
+``relax_s``; docs/formation.md has the details and why.
 
-Sensing: the leader's obstacle list is the static obstacles and the other (non-member) vehicles
-within ``sense_radius_m`` (``ego.sensor = "truth"``), or its own radar returns as assumed boxes
-(``"radar"``, returns near a member's V2V position dropped). Followers get the leader's list and the
-members' states over V2V (Needs(v2v=True): delay and noise of the ``[controllers.formation]``
-keys); with radar each follower adds its own returns. When the leader has reached its goal (and
-left), each follower drives the leader's field to its own goal, sensing around itself.
+**Safety shield** (:mod:`.formation_shield`): every command passes a velocity barrier against the
+obstacles, other vehicles and the other members, whatever the gains. **On a road** (no
+``[arena]``) everything runs in the leader's route frame, the carriageway the walls
+(:mod:`.formation_road`).
+
+Sensing (truth or radar) and V2V: the leader's obstacle list goes to every member; the details,
+and what each member's shield also sees, in docs/formation.md.
 """
 from __future__ import annotations
 
@@ -52,6 +39,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from sumo_avoid.control import formation_field as ff
+from sumo_avoid.control import formation_shield as shield
+from sumo_avoid.control.formation_road import RoadFrame
 from sumo_avoid.core.config import FieldError, field_doc
 from sumo_avoid.core.geometry import (
     convex_distance,
@@ -93,6 +82,8 @@ class FormationParams:
     wait_gain_pm: float = field_doc(0.1, doc="leader slows by this per metre of followers' RMS slot error, 1/m")
     wait_free_m: float = field_doc(2.0, doc="... beyond this RMS slot error, m")
     wait_min: float = field_doc(0.3, positive=True, doc="... down to this fraction of its speed, 1")
+    carrot_m: float = field_doc(30.0, positive=True, doc="road: the leader aims this far ahead, across at the centre "
+                                                        "of the free gap ahead, until its goal is nearer, m")
     lookahead_m: float = field_doc(25.0, positive=True, doc="W_max: obstacles up to this far ahead of the leader, m")
     window_m: float = field_doc(30.0, positive=True, doc="W_max: half width of the window across the heading, m")
     clear_m: float = field_doc(1.0, doc="kappa 2: clearance kept to the obstacles on each side, m")
@@ -103,7 +94,14 @@ class FormationParams:
                                          "own) or 'trail' (each follows the leader's path)")
     behind: float = field_doc(1.0, doc="W_max also counts obstacles beside the formation's rows: this fraction "
                                        "of its depth behind the leader, 1")
+    shield_slide: float = field_doc(0.0, doc="safety shield: a correction also slides along the hazard, this "
+                                             "fraction of it, to the left (arena; no road), 1")
+    predict_s: float = field_doc(0.0, doc="truth: other vehicles count as the (still) box they sweep in this time, s")
     sense_radius_m: float = field_doc(40.0, positive=True, doc="truth: the leader knows obstacles within this range, m")
+    shield_k_ps: float = field_doc(0.5, positive=True, doc="safety shield: approach speed to a hazard at most this "
+                                                          "times the free distance beyond the margin, 1/s")
+    shield_margin_m: float = field_doc(0.3, doc="safety shield: free distance kept to obstacles (disc of the half "
+                                                "diagonal) and vehicles (footprints), m")
     v2v_gate_m: float = field_doc(4.0, positive=True, doc="radar: a return this close to a member's V2V position "
                                                           "is that member and is dropped, m")
     delay_s: float = field_doc(0.0, doc="V2V: members' states arrive this late, s")
@@ -157,10 +155,9 @@ class FormationController:
         self.p = params
         self.step_s = float(ctx.step_s)
         self.tasks: dict[str, EgoTask] = {}
-        self.static = tuple(ctx.obstacles)
-        self._static_polys = pad_polygons(self.static) if self.static else np.zeros((0, 4, 2))
-        self._static_c = np.array([o.mean(axis=0) for o in self.static]).reshape(-1, 2)
-        self._static_r = np.array([np.hypot(*(o - o.mean(axis=0)).T).max() for o in self.static])
+        self._set_static(tuple(ctx.obstacles))
+        # on a road (no [arena]) the formation drives in the leader's route frame (formation_road.py)
+        self._on_road, self.road = getattr(ctx, "road", None) is not None and getattr(ctx, "walls", None) is None, None
         self.order: list[str] = []
         self.offsets = np.zeros((0, 2))
         self.frame: float | None = None
@@ -171,10 +168,14 @@ class FormationController:
         self.gamma_min_seen = np.inf
         self.last = {}  # the last step's gamma, W, W_max, gamma_min (tests, plots)
 
-    # --- protocol --------------------------------------------------------------------------------
+    def _set_static(self, polys) -> None:
+        self.static = tuple(polys)
+        self._static_polys = pad_polygons(self.static) if self.static else np.zeros((0, 4, 2))
+        self._static_c = np.array([o.mean(axis=0) for o in self.static]).reshape(-1, 2)
+        self._static_r = np.array([np.hypot(*(o - o.mean(axis=0)).T).max() for o in self.static])
+
     def v2v_params(self) -> V2VParams:
-        p = self.p
-        return V2VParams(p.delay_s, p.pos_noise_m, p.vel_noise_mps, 0.0, 0.1, 0.0)
+        return V2VParams(self.p.delay_s, self.p.pos_noise_m, self.p.vel_noise_mps, 0.0, 0.1, 0.0)
 
     def add_ego(self, task: EgoTask) -> None:
         self.tasks[task.vid] = task
@@ -192,38 +193,50 @@ class FormationController:
     def tables(self) -> dict:
         return {}
 
-    # --- obstacles -------------------------------------------------------------------------------
     def _obstacles(self, obs: Observation, lead_row, member_pos):
-        """(polys (O,K,2), mask (E,O) which ego feels which, leader's (O,) bool). The leader's list is
-        shared with every member (V2V); radar returns of a follower only with itself."""
+        """(polys (O,K,2), mask (E,O) which ego's field feels which, leader's (O,) bool, static (O,) bool,
+        velocities (O,2), shield mask (E,O)). The leader's list is shared with every member (V2V); radar
+        returns of a follower only with itself; truth: what only the followers sense (beyond the
+        leader's range; arena) goes to the shield alone."""
         snap, E = obs.snapshot, len(obs.ego_ids)
-        parts, owner = [], []  # owner -1: the leader's list (everyone)
-        if obs.detections is None:  # around the leader; once it has left, around every member
-            where = snap.pos[[lead_row]] if lead_row is not None else snap.pos[obs.ego_rows]
-            r = self.p.sense_radius_m
+        parts, owner, vel = [], [], []  # owner -1: the leader's list (everyone)
+        if obs.detections is None:  # around every member (a follower 40 m behind must know what it passes)
+            where, r = snap.pos[obs.ego_rows], self.p.sense_radius_m
+            lead = snap.pos[lead_row] if lead_row is not None and self.road is None else None
             if len(self.static):
                 near = (np.hypot(*(self._static_c[:, None] - where[None]).transpose(2, 0, 1)).min(axis=1)
                         - self._static_r <= r)
                 parts.append(self._static_polys[near])
-                owner += [-1] * int(near.sum())
+                seen = np.hypot(*(self._static_c[near] - lead).T) - self._static_r[near] <= r if lead is not None \
+                    else np.ones(int(near.sum()), bool)
+                owner += np.where(seen, -1, -3).tolist()
+                vel.append(np.full((int(near.sum()), 2), np.nan))  # NaN: a static obstacle
             members = set(self.order)
             o = np.array([k for k, v in enumerate(snap.ids) if v not in members], int)
             if len(o):
                 o = o[np.hypot(*(snap.pos[o][:, None] - where[None]).transpose(2, 0, 1)).min(axis=1) <= r]
-                parts.append(footprint_corners(snap.pos[o], snap.heading[o], snap.length[o], snap.width[o]))
-                owner += [-1] * len(o)
+                ahead = self.p.predict_s * snap.vel[o]  # each as the box it sweeps within predict_s
+                parts.append(footprint_corners(snap.pos[o] + 0.5 * ahead, snap.heading[o],
+                                               snap.length[o] + np.hypot(*ahead.T), snap.width[o]))
+                owner += np.where(np.hypot(*(snap.pos[o] - lead).T) <= r, -1, -3).tolist() if lead is not None \
+                    else [-1] * len(o)
+                vel.append(snap.vel[o] * (self.p.predict_s <= 0))  # a swept box stands still
         else:
-            corners, _, who = radar_obstacles(obs, member_pos, self.p.v2v_gate_m)
+            corners, rv, who = radar_obstacles(obs, member_pos, self.p.v2v_gate_m)
             lead_k = obs.ego_ids.index(snap.ids[lead_row]) if lead_row is not None else -2
             parts.append(corners)
+            vel.append(rv)
             owner += [-1 if w == lead_k else int(w) for w in who]
         parts = [x for x in parts if len(x)]
         if not parts:
-            return np.zeros((0, 4, 2)), np.zeros((E, 0), bool), np.zeros(0, bool)
+            e = np.zeros((E, 0), bool)
+            return np.zeros((0, 4, 2)), e, np.zeros(0, bool), np.zeros(0, bool), np.zeros((0, 2)), e
         polys = pad_polygons([pg for part in parts for pg in part])
         owner = np.asarray(owner)
         mask = (owner[None, :] == -1) | (owner[None, :] == np.arange(E)[:, None])
-        return polys, mask, owner == -1
+        vel = np.concatenate([x for x in vel if len(x)]).reshape(-1, 2)
+        static = np.isnan(vel[:, 0])
+        return polys, mask, owner == -1, static, np.where(static[:, None], 0.0, vel), mask | (owner[None, :] == -3)
 
     def _repulsion(self, pos, heading, length, width, goal, polys, mask) -> np.ndarray:
         """Reshaped goal-aware repulsion (E,2) of each ego from the obstacles it feels."""
@@ -260,7 +273,12 @@ class FormationController:
         f = (p.k_member * k / rho**2)[:, None] * away
         return np.column_stack([np.bincount(i, f[:, 0], E), np.bincount(i, f[:, 1], E)])
 
-    # --- mode --------------------------------------------------------------------------------------
+    def _shield(self, v, pos, heading, length, width, nb_pos, nb_vel, haz) -> np.ndarray:
+        ego = shield.Members(pos, heading, length, width, nb_pos, nb_vel)
+        walls = None if self.road is None else self.road.walls(pos, heading, length, width, self.p.shield_margin_m,
+                                                                 self.p.shield_k_ps)
+        return shield.apply(v, ego, *haz, self.p.shield_margin_m, self.p.shield_k_ps, walls, self.p.shield_slide)
+
     def _mode(self, lead_pos, goal, polys, lead_only, rel_lon, rel_lat, length, width, t) -> None:
         p = self.p
         c, s = np.cos(self.frame), np.sin(self.frame)
@@ -275,7 +293,9 @@ class FormationController:
             iv = np.column_stack([y.min(axis=1), y.max(axis=1)])[keep]
         else:
             iv = np.zeros((0, 2))
-        W_max = ff.free_width(iv, p.window_m)
+        if self.road is not None:  # the corridor's bounds (the frame's heading is the road's, ~0)
+            iv = np.vstack([iv, self.road.occupied(float(lead_pos[1]), depth * p.behind, ahead)])
+        gap_lo, gap_hi, W_max = ff.free_gap(iv, p.window_m)
         gamma = W_max / W
         s_min = ff.min_lateral_scale(self.offsets, length, width, p.safe_gap_m)
         g_min = ff.gamma_min(s_min, span, width, p.clear_m, W)
@@ -294,10 +314,9 @@ class FormationController:
         self.scale = min(target, self.scale + p.widen_rate_ps * self.step_s) if target > self.scale else target
         self.kappa_steps[self.kappa - 1] += 1
         self.gamma_min_seen = min(self.gamma_min_seen, gamma)
-        self.last = {"gamma": gamma, "W": W, "W_now": ff.formation_width(rel_lat, width), "W_max": W_max,
+        self.last = {"gap_centre": 0.5 * (gap_lo + gap_hi), "gamma": gamma, "W": W, "W_now": ff.formation_width(rel_lat, width), "W_max": W_max,
                      "gamma_min": g_min, "kappa": self.kappa}
 
-    # --- the leader's trail (kappa 3) ---------------------------------------------------------------
     def _extend_trail(self, pos) -> None:
         if not len(self.trail):
             self.trail = np.array([[pos[0], pos[1], 0.0]])
@@ -313,17 +332,33 @@ class FormationController:
         return np.column_stack([np.interp(s, self.trail[:, 2], self.trail[:, 0]),
                                 np.interp(s, self.trail[:, 2], self.trail[:, 1])])
 
-    # --- one step ----------------------------------------------------------------------------------
     def act(self, obs: Observation) -> np.ndarray:
+        ids, goals = obs.ego_ids, np.array([self.tasks[v].goal for v in obs.ego_ids], float).reshape(-1, 2)
+        leader = self.order[0] if self.order else None
+        if not self._on_road or (self.road is None and leader not in ids):
+            return self._act(obs, goals)
+        if self.road is None:
+            self.road = RoadFrame(self.tasks[leader])
+            self._set_static(self.road.polygons(self.static))
+        lk = ids.index(leader) if leader in ids else None  # once the leader has left: the frame at a follower
+        fobs = self.road.enter(obs, obs.ego_rows[0 if lk is None else lk])
+        goals = self.road.to_frenet(goals, self.road.s_lead)
+        if lk is not None:
+            goals[lk] = self.road.carrot(fobs.snapshot.pos[obs.ego_rows[lk]], goals[lk], self.p.carrot_m,
+                                         self.last.get("gap_centre", 0.0))
+        return self.road.leave(fobs, self._act(fobs, goals))
+
+    def _act(self, obs: Observation, goals) -> np.ndarray:
         p, snap = self.p, obs.snapshot
         ids, rows = obs.ego_ids, obs.ego_rows
         own_pos, own_vel, nb_pos, nb_vel = obs.v2v.states(snap, rows)
         heading, length, width = snap.heading[rows], snap.length[rows], snap.width[rows]
-        goals = np.array([self.tasks[v].goal for v in ids], float).reshape(-1, 2)
         leader = self.order[0] if self.order else None
         lk = ids.index(leader) if leader in ids else None
-        polys, mask, lead_only = self._obstacles(obs, rows[lk] if lk is not None else None, nb_pos)
-        rep = self._repulsion(own_pos, heading, length, width, goals, polys, mask)
+        polys, mask, lead_only, static, hvel, smask = self._obstacles(obs, rows[lk] if lk is not None else None, nb_pos)
+        haz = (polys, smask, static, hvel)
+        fmask = mask if self.road is None else self.road.field_mask(own_pos, length, width, polys, mask, lk, p.clear_m)
+        rep = self._repulsion(own_pos, heading, length, width, goals, polys, fmask)
         out = np.zeros((len(ids), 2))
         member = self._member_repulsion(own_pos, nb_pos, heading, length, width)
         _, rho_g = _unit(goals - own_pos)
@@ -332,7 +367,8 @@ class FormationController:
         field_v = _unit(field)[0] * cruise[:, None]
         if lk is None:  # the leader is done: each follower drives the field to its own goal
             v = np.array([forward_cone(f, h, np.radians(p.max_turn_deg)) for f, h in zip(field_v, heading)]) + member
-            return v * np.minimum(1.0, p.follower_max_speed_mps / np.maximum(np.hypot(*v.T), 1e-9))[:, None]
+            v = v * np.minimum(1.0, p.follower_max_speed_mps / np.maximum(np.hypot(*v.T), 1e-9))[:, None]
+            return self._shield(v, own_pos, heading, length, width, nb_pos, nb_vel, haz)
         if self.frame is None:
             self.frame = float(heading[lk])
         # the frame turns with the leader's heading, low-passed, and only as fast as the leader moves
@@ -361,4 +397,4 @@ class FormationController:
         v = nb_vel[lk] + gain * err + rep + member
         v = v * np.minimum(1.0, p.follower_max_speed_mps / np.maximum(np.hypot(*v.T), 1e-9))[:, None]
         out[fol] = v[fol]
-        return out
+        return self._shield(out, own_pos, heading, length, width, nb_pos, nb_vel, haz)

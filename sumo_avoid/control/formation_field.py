@@ -22,8 +22,8 @@ def slots(shape: str, n: int, spacing_m: float, apex_deg: float = 90.0) -> np.nd
     * ``v``: the triangle's two edges only: follower j on row ceil(j/2), right then left;
     * ``line`` (line abreast): everyone on the leader's row, right, left, right, ... ``spacing`` apart;
     * ``column``: one behind the other, ``spacing`` apart;
-    * ``diamond``: leader, (-1, -+1), (-2, 0) times s, then the same diamond again 2 s further back
-      (its apex at -2 s shared, so -3 s: +-1, -4 s: 0), and so on.
+    * ``diamond``: leader, (-s, -+s tan(A/2)), (-2 s, 0) (A = 90 deg: (-1, -+1), (-2, 0) times s), then
+      the same diamond again 2 s further back (its apex at -2 s shared, so -3 s: +-1, -4 s: 0), and so on.
     """
     if shape not in SHAPES:
         raise ValueError(f"shape must be one of {list(SHAPES)}")
@@ -50,7 +50,7 @@ def slots(shape: str, n: int, spacing_m: float, apex_deg: float = 90.0) -> np.nd
         j = 1
         while len(out) < n:
             base = -2.0 * ((j - 1) // 3) * s
-            out.append([(base - s, -s), (base - s, s), (base - 2 * s, 0.0)][(j - 1) % 3])
+            out.append([(base - s, -s * t), (base - s, s * t), (base - 2 * s, 0.0)][(j - 1) % 3])
             j += 1
     return np.asarray(out[:n], float)
 
@@ -127,11 +127,18 @@ def free_width(intervals: np.ndarray, half_window_m: float) -> float:
     since the shape is held about the leader; if an obstacle covers y = 0 the leader's field takes
     it round one side, and W_max is the width of the wider of the two gaps next to the obstacles
     covering it. With nothing ahead W_max = 2 half_window."""
+    return free_gap(intervals, half_window_m)[2]
+
+
+def free_gap(intervals: np.ndarray, half_window_m: float) -> tuple[float, float, float]:
+    """(lo, hi, W_max) of :func:`free_width`: the free gap it measures (the one about the leader's
+    line, or the wider one next to the obstacles covering it), m; its centre is where the leader
+    would have to be for the whole gap to count."""
     lo_w, hi_w = -float(half_window_m), float(half_window_m)
     iv = np.asarray(intervals, float).reshape(-1, 2)
     iv = iv[(iv[:, 1] > lo_w) & (iv[:, 0] < hi_w)]
     if len(iv) == 0:
-        return hi_w - lo_w
+        return lo_w, hi_w, hi_w - lo_w
     iv = np.clip(iv[np.argsort(iv[:, 0])], lo_w, hi_w)
     merged = [list(iv[0])]
     for a, b in iv[1:]:  # merge overlapping intervals (a few per step)
@@ -144,9 +151,10 @@ def free_width(intervals: np.ndarray, half_window_m: float) -> float:
     inside = np.flatnonzero((edges[:, 0] <= 0.0) & (edges[:, 1] >= 0.0))
     if len(inside):
         lo, hi = edges[inside[0]]
-        return float(2.0 * min(-lo, hi))
+        return float(lo), float(hi), float(2.0 * min(-lo, hi))
     blocked = next(i for i, (a, b) in enumerate(merged) if a <= 0.0 <= b)  # merged block i: gaps i, i + 1
-    return float(max(widths[blocked], widths[blocked + 1]))
+    k = blocked if widths[blocked] >= widths[blocked + 1] else blocked + 1
+    return float(edges[k, 0]), float(edges[k, 1]), float(widths[k])
 
 
 def gamma_min(s_min: float, span_m: float, width_m: float, clear_m: float, W: float) -> float:

@@ -17,7 +17,8 @@ the modes' time shares and obstacle contacts. Smaller S_ef is better; each term 
   D = RMS distance of the nominal slots from the leader (17.5 m for the triangle of 6 at 8 m).
 
 Also: ``obstacle_hits`` (contact episodes of a member's footprint with a static obstacle
-polygon), ``kappa1_share`` .. ``kappa3_share`` (fraction of the controller's steps in each mode,
+polygon), ``obstacle_min_gap_m`` (the smallest footprint-to-obstacle distance of any member, m,
+among obstacles within ``NEAR_M`` of its circumcircle; None if none came that near), ``kappa1_share`` .. ``kappa3_share`` (fraction of the controller's steps in each mode,
 ``formation_kappa_steps``), ``formation_time_s`` (T, None if a member never arrived).
 """
 from __future__ import annotations
@@ -26,10 +27,17 @@ import numpy as np
 
 from sumo_avoid.control import formation_field as ff
 from sumo_avoid.control.formation import member_order
-from sumo_avoid.core.geometry import convex_overlap, footprint_corners, pad_polygons
+from sumo_avoid.core.geometry import (
+    convex_distance,
+    convex_overlap,
+    footprint_corners,
+    pad_polygons,
+)
 from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.rollout.result import RunResult
+
+NEAR_M = 5.0  # obstacle_min_gap_m looks at obstacles within this of a footprint's circumcircle, m
 
 
 def _tracks(run: RunResult, order):
@@ -89,36 +97,38 @@ def arrival_time(times, tr, goals, tol: float) -> float | None:
     return worst
 
 
-def obstacle_hits(times, tr, polys) -> int:
-    """Contact episodes (consecutive recorded steps) of member footprints with obstacle polygons."""
+def obstacle_contacts(times, tr, polys) -> tuple[int, float | None]:
+    """(contact episodes (consecutive recorded steps) of member footprints with obstacle polygons,
+    the smallest footprint-to-obstacle distance over the run, m; None without obstacles nearby)."""
     if not len(polys):
-        return 0
+        return 0, None
     P = pad_polygons(polys)
     cen = P.mean(axis=1)
     rad = np.hypot(*(P - cen[:, None]).transpose(2, 0, 1)).max(axis=1)
-    hits = 0
+    hits, gap = 0, np.inf
     for x in tr:
         ok = np.flatnonzero(~np.isnan(x[:, 0]))
         pos = x[ok, :2]
         d = np.hypot(pos[:, None, 0] - cen[None, :, 0], pos[:, None, 1] - cen[None, :, 1])
-        k, o = np.nonzero(d <= rad[None] + 0.5 * np.hypot(x[ok, 5], x[ok, 6])[:, None])
+        k, o = np.nonzero(d <= rad[None] + 0.5 * np.hypot(x[ok, 5], x[ok, 6])[:, None] + NEAR_M)
         if not len(k):
             continue
         fp = footprint_corners(pos[k], x[ok[k], 4], x[ok[k], 5], x[ok[k], 6])
+        gap = min(gap, float(convex_distance(fp, P[o])[0].min()))
         touch = convex_overlap(fp, P[o])
         contact = np.zeros((len(ok), len(P)), bool)
         contact[k[touch], o[touch]] = True
         starts = contact & ~np.vstack([np.zeros((1, len(P)), bool), contact[:-1]])
         hits += int(starts.sum())
-    return hits
+    return hits, (gap if np.isfinite(gap) else None)
 
 
 class FormationScore(Metric):
     """S_ef = I_t + I_e + I_d (SPEC §3), kappa time shares, obstacle contacts (none of them when no
     member has a goal)."""
 
-    keys = Keys(("s_ef", "i_t", "i_e", "i_d", "formation_time_s", "t_ref_s", "obstacle_hits", "kappa1_share",
-                 "kappa2_share", "kappa3_share"))
+    keys = Keys(("s_ef", "i_t", "i_e", "i_d", "formation_time_s", "t_ref_s", "obstacle_hits", "obstacle_min_gap_m",
+                 "kappa1_share", "kappa2_share", "kappa3_share"))
 
     def compute(self, run: RunResult) -> dict:
         spec = run.scenario.spec
@@ -137,6 +147,7 @@ class FormationScore(Metric):
         i_d = distortion(tr, offsets)
         steps = np.asarray(run.stats.get("formation_kappa_steps", [0, 0, 0]), float)
         share = steps / steps.sum() if steps.sum() > 0 else np.zeros(3)
+        hits, gap = obstacle_contacts(times, tr, run.scene.obstacles)
         return {"s_ef": i_t + i_e + i_d, "i_t": i_t, "i_e": i_e, "i_d": i_d, "formation_time_s": T,
-                "t_ref_s": t_ref, "obstacle_hits": obstacle_hits(times, tr, run.scene.obstacles),
+                "t_ref_s": t_ref, "obstacle_hits": hits, "obstacle_min_gap_m": gap,
                 "kappa1_share": share[0], "kappa2_share": share[1], "kappa3_share": share[2]}

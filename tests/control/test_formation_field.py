@@ -30,7 +30,10 @@ def test_other_shapes():
     assert ff.slots("line", 4, 5.0).tolist() == [[0, 0], [0, -5], [0, 5], [0, -10]]
     assert ff.slots("column", 3, 5.0).tolist() == [[0, 0], [-5, 0], [-10, 0]]
     assert ff.slots("v", 5, 2.0) == pytest.approx(np.array([[0, 0], [-2, -2], [-2, 2], [-4, -4], [-4, 4]]))
-    assert ff.slots("diamond", 6, 1.0).tolist() == [[0, 0], [-1, -1], [-1, 1], [-2, 0], [-3, -1], [-3, 1]]
+    assert ff.slots("diamond", 6, 1.0) == pytest.approx(np.array([[0, 0], [-1, -1], [-1, 1], [-2, 0], [-3, -1], [-3, 1]]))
+    # the road case's diamond: 15 m along, apex 2 atan(3.5 / 15): one 3.5 m lane to each side
+    apex = 2.0 * math.degrees(math.atan(3.5 / 15.0))
+    assert ff.slots("diamond", 4, 15.0, apex) == pytest.approx(np.array([[0, 0], [-15, -3.5], [-15, 3.5], [-30, 0]]))
     with pytest.raises(ValueError):
         ff.slots("circle", 3, 1.0)
 

@@ -11,7 +11,7 @@ from sumo_avoid.metrics.formation import (
     arrival_time,
     distortion,
     energy_rate,
-    obstacle_hits,
+    obstacle_contacts,
 )
 
 
@@ -42,10 +42,14 @@ def test_distortion_by_hand():
     assert arrival_time(times, np.stack([lead, fol]), [(0, 0), (9, 9)], 0.5) is None
 
 
-def test_obstacle_hits_count_episodes():
+def test_obstacle_contacts_count_episodes_and_min_gap():
     square = np.array([[4.0, -1.0], [6.0, -1.0], [6.0, 1.0], [4.0, 1.0]])
     # a 4 m car moving along x through the square: contact from x = 2 to x = 8, then a gap, then again
     x = np.array([0.0, 2.5, 5.0, 7.5, 12.0, 5.0])
     tr = _track(x, np.zeros(6), np.ones(6), np.zeros(6))[None]
-    assert obstacle_hits(np.arange(6.0), tr, (square,)) == 2
-    assert obstacle_hits(np.arange(6.0), tr, ()) == 0
+    hits, gap = obstacle_contacts(np.arange(6.0), tr, (square,))
+    assert hits == 2 and gap == 0.0
+    assert obstacle_contacts(np.arange(6.0), tr, ()) == (0, None)
+    # the car's front bumper (x + 2) at x = 1.3 and 0.5 is 0.7 and 1.5 m short of the square's face x = 4
+    hits, gap = obstacle_contacts(np.arange(2.0), _track([0.5, 1.3], [0, 0], [1, 1], [0, 0])[None], (square,))
+    assert hits == 0 and gap == pytest.approx(0.7)
