@@ -12,6 +12,7 @@ from scipy.spatial import cKDTree
 
 from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.curves import braking_curve_D as D
+from sumo_avoid.core.geometry import unit_norm
 
 # seed Table 3 (GA-optimised values at v_flock = 4 / 6 / 8 m/s). v_max is printed only for
 # v_flock = 4 (8 m/s); we keep the same ratio v_max = 2 v_flock for 6 and 8 (assumption).
@@ -99,11 +100,6 @@ def _norm(v):
     return np.hypot(v[..., 0], v[..., 1])
 
 
-def unit(v, eps=1e-12):
-    n = _norm(v)
-    return np.where((n > eps)[..., None], v / np.maximum(n, eps)[..., None], 0.0), n
-
-
 def _sum_by(idx, vecs, n):
     """Σ of (M,2) vectors grouped by idx (M,) into (n,2) (bincount: no Python loop over pairs)."""
     return np.column_stack([np.bincount(idx, vecs[:, 0], n), np.bincount(idx, vecs[:, 1], n)])
@@ -131,14 +127,14 @@ def repulsion(pos_i, pos_j, i, j, r, p: FlockingParams, n):
     """Σ_j v_ij_rep (eq. 1-2): p_rep (r0_rep - r_ij) (r_i - r_j)/r_ij for r_ij < r0_rep. (n,2) m/s."""
     k = r < p.r0_rep_m
     i, j, r = i[k], j[k], r[k]
-    u, _ = unit(pos_i[i] - pos_j[j])
+    u, _ = unit_norm(pos_i[i] - pos_j[j])
     return _sum_by(i, (p.p_rep_ps * (p.r0_rep_m - r))[:, None] * u, n)
 
 
 def friction(vel_i, vel_j, i, j, r, p: FlockingParams, n):
     """Σ_j v_ij_frict (eq. 4-6, SPEC sign): -C (v_ij - v_max_ij) (v_i - v_j)/v_ij if v_ij > v_max_ij."""
     dv = vel_i[i] - vel_j[j]
-    u, vij = unit(dv)
+    u, vij = unit_norm(dv)
     vmax = np.maximum(p.v_frict_mps, D(r - p.r0_frict_m, p.a_frict_mps2, p.p_frict_ps))
     mag = np.where(vij > vmax, -p.c_frict * (vij - vmax), 0.0)
     return _sum_by(i, mag[:, None] * u, n)
@@ -157,7 +153,7 @@ def shill(vel, dist, normal, p: FlockingParams, v_obj=None):
     dv = v_s - vel[:, None, :]
     if p.shill_normal_only:  # road adaptation: only the velocity across the wall/obstacle face counts
         dv = (dv * normal).sum(-1)[..., None] * normal
-    u, v_is = unit(dv)
+    u, v_is = unit_norm(dv)
     vmax = D(dist - p.r0_shill_m, p.a_shill_mps2, p.p_shill_ps)
     mag = np.where(v_is > vmax, v_is - vmax, 0.0)
     return (mag[..., None] * u).sum(axis=1)
@@ -203,7 +199,7 @@ def polygon_shills(pos, polys):
     dist = np.take_along_axis(dk, k[..., None], axis=2)[..., 0]
     signed = np.where(valid[None], (rel * out_n[None]).sum(-1), -np.inf)  # >0 outside that edge
     inside = (signed <= 0).all(axis=2)
-    away, _ = unit(pos[:, None, :] - nearest)
+    away, _ = unit_norm(pos[:, None, :] - nearest)
     inner_n = np.take_along_axis(out_n[None].repeat(len(pos), 0), np.argmax(signed, axis=2)[..., None, None],
                                  axis=2)[:, :, 0]
     direction = np.where(inside[..., None] | (dist[..., None] < 1e-9), inner_n, away)
@@ -212,6 +208,6 @@ def polygon_shills(pos, polys):
 
 def combine(v_tilde, p: FlockingParams):
     """Eq. 10 (cutoff) or the reference simulator's rescale to v_flock."""
-    u, n = unit(v_tilde)
+    u, n = unit_norm(v_tilde)
     speed = np.minimum(n, p.v_max_mps) if p.speed_rule == "cutoff" else np.full_like(n, p.v_flock_mps)
     return u * speed[:, None]

@@ -45,13 +45,13 @@ from sumo_avoid.control.flock_terms import (
     repulsion,
     segment_shills,
     shill,
-    unit,
 )
 from sumo_avoid.core.geometry import (
     ccw_polygon,
     footprint_corners,
     pad_polygons,
     ring_walls,
+    unit_norm,
 )
 from sumo_avoid.core.types import EgoTask, Keys, Needs, Observation
 from sumo_avoid.sensing.perception import radar_obstacles
@@ -145,7 +145,7 @@ class FlockingController:
         p = self.p
         e = len(own_pos)
         i, j, r = neighbour_pairs(own_pos, nb_pos, p.r_c_m, same=True, use_tree=e >= p.kdtree_min_agents)
-        u, spd = unit(own_vel)
+        u, spd = unit_norm(own_vel)
         hd = np.column_stack([np.cos(heading), np.sin(heading)])
         u = np.where((spd > 1e-6)[:, None], u, hd)
         v = p.v_flock_mps * u

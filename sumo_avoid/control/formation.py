@@ -46,6 +46,7 @@ from sumo_avoid.core.geometry import (
     convex_distance,
     footprint_corners,
     pad_polygons,
+    unit_norm,
     wrap_angle,
 )
 from sumo_avoid.core.types import EgoTask, Keys, Needs, Observation
@@ -127,10 +128,6 @@ def member_order(params: FormationParams, ego_ids) -> list[str]:
     """Slot order of the formation: ``members`` if given, else the ids in natural order."""
     return list(params.members) if params.members else sorted(ego_ids, key=natural_key)
 
-
-def _unit(v):
-    n = np.hypot(v[..., 0], v[..., 1])
-    return np.where((n > 1e-12)[..., None], v / np.maximum(n, 1e-12)[..., None], 0.0), n
 
 
 def forward_cone(v, heading: float, max_turn: float) -> np.ndarray:
@@ -245,10 +242,10 @@ class FormationController:
             return np.zeros((E, 2))
         ego = footprint_corners(pos, heading, length, width)
         rho, on_ego, on_obs = convex_distance(np.repeat(ego, O, axis=0), np.tile(polys, (E, 1, 1)))
-        away, n = _unit(on_ego - on_obs)
-        centre, _ = _unit(np.repeat(pos, O, axis=0) - np.tile(polys.mean(axis=1), (E, 1)))
+        away, n = unit_norm(on_ego - on_obs)
+        centre, _ = unit_norm(np.repeat(pos, O, axis=0) - np.tile(polys.mean(axis=1), (E, 1)))
         away = np.where((n > 1e-6)[:, None], away, centre)
-        to_goal, rho_g = _unit(np.asarray(goal, float) - pos)
+        to_goal, rho_g = unit_norm(np.asarray(goal, float) - pos)
         rho = np.where(mask.ravel(), np.maximum(rho, p.rho_floor_m), np.inf)
         f1, f2 = ff.repulsion_terms(rho, away, np.repeat(rho_g, O), np.repeat(to_goal, O, axis=0),
                                     p.eta_re, p.rho0_m, p.n_goal)
@@ -265,8 +262,8 @@ class FormationController:
         a = footprint_corners(own_pos[i], heading[i], length[i], width[i])
         b = footprint_corners(nb_pos[j], heading[j], length[j], width[j])
         rho, on_a, on_b = convex_distance(a, b)
-        away, n = _unit(on_a - on_b)
-        centre, _ = _unit(own_pos[i] - nb_pos[j])
+        away, n = unit_norm(on_a - on_b)
+        centre, _ = unit_norm(own_pos[i] - nb_pos[j])
         away = np.where((n > 1e-6)[:, None], away, centre)
         rho = np.maximum(rho, p.rho_floor_m)
         k = np.where(rho <= p.rho0_member_m, 1.0 / rho - 1.0 / p.rho0_member_m, 0.0)
@@ -361,10 +358,10 @@ class FormationController:
         rep = self._repulsion(own_pos, heading, length, width, goals, polys, fmask)
         out = np.zeros((len(ids), 2))
         member = self._member_repulsion(own_pos, nb_pos, heading, length, width)
-        _, rho_g = _unit(goals - own_pos)
+        _, rho_g = unit_norm(goals - own_pos)
         field = ff.attraction(own_pos, goals, p.eta_at) + rep
         cruise = p.leader_speed_mps * np.minimum(1.0, rho_g / p.slow_radius_m)
-        field_v = _unit(field)[0] * cruise[:, None]
+        field_v = unit_norm(field)[0] * cruise[:, None]
         if lk is None:  # the leader is done: each follower drives the field to its own goal
             v = np.array([forward_cone(f, h, np.radians(p.max_turn_deg)) for f, h in zip(field_v, heading)]) + member
             v = v * np.minimum(1.0, p.follower_max_speed_mps / np.maximum(np.hypot(*v.T), 1e-9))[:, None]

@@ -30,7 +30,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from sumo_avoid.core.geometry import convex_distance, footprint_corners
+from sumo_avoid.core.geometry import convex_distance, footprint_corners, unit_norm
 
 #: heading_cap never slows a car below this, m/s.
 CREEP_MPS = 0.5
@@ -46,10 +46,6 @@ class Members(NamedTuple):
     nb_vel: np.ndarray
 
 
-def _unit(v):
-    n = np.hypot(v[..., 0], v[..., 1])
-    return np.where((n > 1e-12)[..., None], v / np.maximum(n, 1e-12)[..., None], 0.0), n
-
 
 def disc_hazards(pos, radius, polys, centroid):
     """Static obstacles against each ego's disc: pos (E, 2) centres, radius (E,) m, polys (O, K, 2),
@@ -58,9 +54,9 @@ def disc_hazards(pos, radius, polys, centroid):
     E, O = len(pos), len(polys)
     pts = np.repeat(np.asarray(pos, float), O, axis=0)[:, None, :]
     d, _, on_obs = convex_distance(pts, np.tile(polys, (E, 1, 1)))
-    n, _ = _unit(pts[:, 0] - on_obs)
+    n, _ = unit_norm(pts[:, 0] - on_obs)
     inside = d <= 1e-9  # centre inside the polygon: away from its centroid
-    n = np.where(inside[:, None], _unit(pts[:, 0] - np.tile(centroid, (E, 1)))[0], n)
+    n = np.where(inside[:, None], unit_norm(pts[:, 0] - np.tile(centroid, (E, 1)))[0], n)
     return n.reshape(E, O, 2), d.reshape(E, O) - np.repeat(radius, O).reshape(E, O)
 
 
@@ -70,8 +66,8 @@ def footprint_hazards(own, others, own_pos, other_pos):
     centre when in contact), gap (E, O) m, 0 in contact)."""
     E, O = len(own), len(others)
     d, on_a, on_b = convex_distance(np.repeat(own, O, axis=0), np.tile(others, (E, 1, 1)))
-    n, ln = _unit(on_a - on_b)
-    c, _ = _unit(np.repeat(own_pos, O, axis=0) - np.tile(other_pos, (E, 1)))
+    n, ln = unit_norm(on_a - on_b)
+    c, _ = unit_norm(np.repeat(own_pos, O, axis=0) - np.tile(other_pos, (E, 1)))
     n = np.where((ln > 1e-6)[:, None], n, c)
     return n.reshape(E, O, 2), d.reshape(E, O)
 

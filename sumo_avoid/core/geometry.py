@@ -107,6 +107,12 @@ def _edges(P):
     return P, np.roll(P, -1, axis=-2)
 
 
+def unit_norm(v, eps: float = 1e-12):
+    """(unit vectors, lengths) of (..., 2) vectors; a vector no longer than ``eps`` gives 0."""
+    n = np.hypot(v[..., 0], v[..., 1])
+    return np.where((n > eps)[..., None], v / np.maximum(n, eps)[..., None], 0.0), n
+
+
 def _unit(v):
     n = np.linalg.norm(v, axis=-1, keepdims=True)
     return np.where(n > 0.0, v / np.where(n > 0.0, n, 1.0), 0.0)
