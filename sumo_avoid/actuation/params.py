@@ -12,7 +12,9 @@ class ActuatorConfig:
     max_decel_mps2: float = field_doc(8.0, doc="largest braking deceleration, m/s^2")
     max_lat_accel_mps2: float = field_doc(4.0, doc="largest lateral acceleration v*yaw_rate, m/s^2")
     max_yaw_rate_radps: float = field_doc(0.8, doc="largest yaw rate, rad/s")
-    min_turn_radius_m: float = field_doc(5.5, doc="smallest turning radius (yaw rate <= v/R), m")
+    min_turn_radius_m: float = field_doc(4.25, doc="smallest turning radius of the vehicle's centre (yaw rate <= v/R), m: "
+                                                  "a compact car with an 11 m kerb-to-kerb turning circle (outer front "
+                                                  "wheel on 5.5 m, 2.65 m wheelbase, 1.55 m track) turns its centre on 4.25 m")
     max_reverse_speed_mps: float = field_doc(2.0, doc="reverse gear speed limit, m/s (0 = no reversing)")
     mode: str = field_doc("kinematic", doc="'kinematic' (car: accel/yaw limits) or 'relaxation' (flocking "
                                            "reference: dv/dt = (v_des - v)/tau, |dv/dt| <= relax_max_accel)")

@@ -126,13 +126,14 @@ class ApfController:
         self.max_course = np.radians(params.max_course_deg)
         self.rng = ctx.rng()
         self.step_s = float(ctx.step_s)
+        self.steering = (float(ctx.turn_radius_m), float(ctx.yaw_rate_radps))  # the drivable line, the speed in turns (RoadView)
         self.tasks: dict[str, EgoTask] = {}
         self.views: dict[str, RoadView] = {}
         self.last_force: dict[str, float] = {}
 
     def add_ego(self, task: EgoTask) -> None:
         self.tasks[task.vid] = task
-        self.views[task.vid] = RoadView(task)
+        self.views[task.vid] = RoadView(task, *self.steering)
 
     def remove_ego(self, vid: str) -> None:
         self.tasks.pop(vid, None)

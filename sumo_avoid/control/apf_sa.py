@@ -160,8 +160,8 @@ class ApfSaController(ApfController):
         need = 0.5 * sc.width + self.p.escape_margin_m
         s_c = min(sc.s + self.lookahead(float(np.hypot(*sc.vel))), view.length_m)  # the carrot's s
         lo, hi = (float(v[0]) for v in view.corridor([s_c]))
-        if view.lanes is not None:
-            _, centres = view.lanes.centres(s_c)
+        centres = view.lane_centres(s_c)
+        if centres is not None:
             for c in sorted((float(c) for c in centres), key=lambda c: abs(c - offset)):
                 if (lo + need <= c <= hi - need and self._room_ahead(
                         sc, at=(float(end[0]), c), heading=0.0) >= self.p.sa_free_ahead_m):

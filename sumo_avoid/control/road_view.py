@@ -18,9 +18,11 @@ from typing import Callable
 
 import numpy as np
 
+from sumo_avoid.core.drivable import NONE, drivable_line
 from sumo_avoid.core.frenet import RouteFrame
 from sumo_avoid.core.geometry import wrap_angle
 from sumo_avoid.core.lanes import RouteLanes
+from sumo_avoid.core.polyline import arc_lengths
 from sumo_avoid.core.types import EgoTask, Observation
 from sumo_avoid.sensing.perception import obstacle_vehicles
 
@@ -28,6 +30,10 @@ from sumo_avoid.sensing.perception import obstacle_vehicles
 MAX_ABS_D_M = 20.0
 #: A vehicle whose footprint stays this far outside the ego's lanes is no obstacle to it, m.
 OUTSIDE_MARGIN_M = 0.2
+#: On a drivable line the bounds of the lanes stay at least this far from a car on it, m.
+LINE_CLEAR_M = 1.0
+#: On a drivable line, the speed leaves this share of the largest yaw rate for corrections.
+YAW_RESERVE = 0.75
 #: Window of the ego's own projection around its last arc length, m.
 TRACK_WINDOW_M = 30.0
 
@@ -57,11 +63,22 @@ class FrenetScene:
 class RoadView:
     """The route frame and lanes of one ego, with its arc length tracked from step to step."""
 
-    def __init__(self, task: EgoTask):
+    def __init__(self, task: EgoTask, turn_radius_m: float = 0.0, yaw_rate_radps: float = np.inf):
         self.frame = RouteFrame.from_polyline(task.path)
         self.lanes = RouteLanes(task.lanes) if task.lanes else None
+        # d is measured from the drivable line (core.drivable), not the lane centre, where a turn
+        # is tighter than the car's turning radius; elsewhere (and with no radius) they coincide
+        self.line = (drivable_line(self.frame, self.lanes.corridor, 0.5 * task.width_m, turn_radius_m)
+                     if self.lanes is not None else NONE)
+        self.yaw_rate_radps = yaw_rate_radps
+        self._room = 0.5 * task.width_m + LINE_CLEAR_M
+        self._line_frame = None  # the line's own frame and its arc length at the line's grid, for its curvature
+        if len(self.line.s):
+            xy = self.frame.to_xy(self.line.s, self.line.d)
+            # curvature smoothed over 1 m, not 5: the line's swing out before a tight turn is a few metres long
+            self._line_frame = (RouteFrame.from_polyline(xy, smooth_m=1.0), self.line.s, arc_lengths(xy))
         gs, gd = self.frame.to_frenet(np.asarray(task.goal, float)[None, :])
-        self.goal = np.array([gs[0], gd[0]])
+        self.goal = np.array([gs[0], gd[0] - self.line.offset(gs)[0]])
         self._s: float | None = None
 
     @property
@@ -74,20 +91,44 @@ class RoadView:
         hint = None if self._s is None else np.array([self._s])
         s, d = self.frame.to_frenet(np.asarray(xy, float)[None, :], hint, TRACK_WINDOW_M)
         self._s = float(s[0])
-        return float(s[0]), float(d[0])
+        return float(s[0]), float(d[0] - self.line.offset(s)[0])
 
     def corridor(self, s) -> tuple[np.ndarray, np.ndarray]:
         if self.lanes is None:
             s = np.atleast_1d(np.asarray(s, float))
             return np.full(len(s), -np.inf), np.full(len(s), np.inf)
-        return self.lanes.corridor(s)
+        lo, hi = self.lanes.corridor(s)
+        off = self.line.offset(s)
+        lo, hi = lo - off, hi - off
+        # where the line swings close to a bound (by plan, to make a tight turn), the bound leaves the
+        # car on the line room to spare: its push had held the car off the line, inwards at a turn's
+        # wide entry (rand08: 1.5 m off, then out against the oncoming lane at the exit)
+        wide = np.abs(off) > 1e-9
+        return np.where(wide, np.minimum(lo, -self._room), lo), np.where(wide, np.maximum(hi, self._room), hi)
+
+    def lane_centres(self, s: float) -> np.ndarray | None:
+        """d of every lane centre of the route's edge at arc length s (by lane index), or None."""
+        if self.lanes is None:
+            return None
+        return self.lanes.centres(s)[1] - self.line.offset(s)[0]
+
+    def _from_line(self, s, d, rel_heading, vel):
+        """Lane-centre frame -> the drivable line's: d, relative heading and velocity (s_dot, d_dot)
+        measured from the line (its offset and slope at s)."""
+        slope = self.line.slope(s)
+        vel = np.array(vel, float).reshape(-1, 2)
+        vel[:, 1] -= vel[:, 0] * slope
+        return d - self.line.offset(s), wrap_angle(rel_heading - np.arctan(slope)), vel
 
     def scene(self, obs: Observation, row: int, sense_radius_m: float) -> FrenetScene:
         snap = obs.snapshot
         q = snap.pos[row]
         s, d = self.locate(q)
+        d_raw = d + float(self.line.offset(s)[0])
         h_path = float(self.frame.heading_at(s)[0])
-        v_s, v_d = self.frame.velocity_to_frenet(s, d, snap.vel[row][None, :])
+        v_s, v_d = self.frame.velocity_to_frenet(s, d_raw, snap.vel[row][None, :])
+        _, h_rel, vel = self._from_line(np.array([s]), d_raw, np.array([wrap_angle(snap.heading[row] - h_path)]),
+                                        np.array([[v_s[0], v_d[0]]]))
         o_pos, o_hd, o_len, o_wid, o_vel = obstacle_vehicles(obs, row, q, sense_radius_m)
         if len(o_pos):
             os_, od = self.frame.to_frenet(o_pos, np.full(len(o_pos), s), sense_radius_m)
@@ -98,14 +139,15 @@ class RoadView:
             # a vehicle wholly outside the ego's lanes (oncoming traffic beyond the centre line,
             # a car on a road nearby) is behind a bound the ego keeps to: not an obstacle to it
             half = 0.5 * (np.abs(np.sin(o_rel)) * o_len + np.abs(np.cos(o_rel)) * o_wid)
-            lo, hi = self.corridor(os_)
+            lo, hi = self.lanes.corridor(os_) if self.lanes is not None else self.corridor(os_)
             keep = (od + half > lo - OUTSIDE_MARGIN_M) & (od - half < hi + OUTSIDE_MARGIN_M)
             os_, od, o_rel, o_len, o_wid, o_vel = os_[keep], od[keep], o_rel[keep], o_len[keep], o_wid[keep], o_vel[keep]
             vs, vd = self.frame.velocity_to_frenet(os_, od, o_vel)
-            o_pos, o_vel = np.column_stack([os_, od]), np.column_stack([vs, vd])
+            od, o_rel, o_vel = self._from_line(os_, od, o_rel, np.column_stack([vs, vd]))
+            o_pos = np.column_stack([os_, od])
         else:
             o_rel = np.zeros(0)
-        return FrenetScene(s, d, float(wrap_angle(snap.heading[row] - h_path)), np.array([v_s[0], v_d[0]]),
+        return FrenetScene(s, d, float(h_rel[0]), vel[0],
                            float(snap.length[row]), float(snap.width[row]),
                            o_pos.reshape(-1, 2), o_rel, o_len, o_wid, o_vel.reshape(-1, 2), self.corridor)
 
@@ -120,10 +162,23 @@ class RoadView:
         if speed < 1e-12:
             return np.zeros(2)
         s_ff = s + max(float(v[0]), 0.0) * lead_s
-        xy = self.frame.velocity_to_xy(s_ff, d, v[0], v[1])[0]
+        d_raw = d + float(self.line.offset(s_ff)[0])  # back from the drivable line to the lane centre's frame
+        d_dot = v[1] + v[0] * float(self.line.slope(s_ff)[0])
+        xy = self.frame.velocity_to_xy(s_ff, d_raw, v[0], d_dot)[0]
         n = float(np.hypot(*xy))
         return xy / n * speed if n > 1e-12 else np.zeros(2)
 
     def curve_speed(self, s: float, a_lat_mps2: float, decel_mps2: float) -> float:
-        """Speed for the road ahead from its curvature (RouteFrame.curve_speed_limit, full envelope)."""
-        return float(self.frame.curve_speed_limit(s, np.inf, a_lat_mps2, decel_mps2)[0])
+        """Speed for the road ahead from its curvature (RouteFrame.curve_speed_limit, full envelope):
+        of the lane centres and, where the car drives a drivable line, of that line too (its wide
+        entry bends the other way before the turn: a car still fast there cannot follow it)."""
+        v = float(self.frame.curve_speed_limit(s, np.inf, a_lat_mps2, decel_mps2)[0])
+        if self._line_frame is not None:
+            frame, grid, arc = self._line_frame
+            sl = np.interp(s, grid, arc)
+            v = min(v, float(frame.curve_speed_limit(sl, np.inf, a_lat_mps2, decel_mps2)[0]))
+            if np.isfinite(self.yaw_rate_radps):  # and slow enough to turn with YAW_RESERVE of the yaw rate to spare
+                k = float(frame.max_abs_curvature_ahead(sl, 2.0)[0])
+                if k > 0.0:
+                    v = min(v, YAW_RESERVE * self.yaw_rate_radps / k)
+        return v

@@ -30,6 +30,8 @@ class Context:
     road: Any = None  # sumo_avoid.sumo.road.Road: drivable area, edges, lines, route paths (read-only)
     walls: np.ndarray | None = None  # (k, 2) allowed area when the scenario has an [arena], else None
     obstacles: tuple[np.ndarray, ...] = field(default=())  # static obstacle polygons, each (k, 2) m
+    turn_radius_m: float = 0.0  # the egos' smallest turning radius (the kinematic actuator's), m; 0: none
+    yaw_rate_radps: float = float("inf")  # the egos' largest yaw rate (the kinematic actuator's), rad/s
 
     def rng(self, *stream: int) -> np.random.Generator:
         """The random stream of one consumer: ``default_rng(seed)`` (the controller's) or

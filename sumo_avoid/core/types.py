@@ -25,6 +25,7 @@ class FoeLink:
     state: str = ""  # static right of way in the net (M, m, =, ...)
     direction: str = ""  # s, l, r, t, L, R
     approach: tuple[tuple[str, float], ...] = ()  # (SUMO lane id, distance from the lane's start to the conflict point), m
+    line_m: float = 0.0  # distance from its stop line (the end of its incoming lane) to the conflict point, m
 
 
 @dataclass(frozen=True)
@@ -66,6 +67,7 @@ class EgoTask:
     links: tuple[RouteLink, ...] = ()  # junction links along the path, in route order
     speed_limits: np.ndarray | None = None  # (K, 2) [s where a lane piece starts, its speed limit], m, m/s
     lanes: tuple[LanePiece, ...] = ()  # the path's lane pieces, in route order
+    width_m: float = 1.8  # the ego's width (SUMO's vehicle type), m
 
 
 @dataclass(frozen=True)

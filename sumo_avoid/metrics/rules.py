@@ -14,6 +14,9 @@ recording).
 Details per crossing of a yielding link in ``yield_crossings`` (ego, junction, time, state, the
 first foe and its arrival time, s).
 
+At an all-way stop, first come first served: a foe standing at its line that came to stand after
+the ego did is no foe, the others arrive as from a standing start (safety.yielding).
+
 ``stop_sign_violations``: the ego's front crosses the line of a stop sign ('s' / 'w') without
 having stood (slower than ``[rules]`` stop_speed_mps) within stop_margin_m + stop_zone_m before it;
 ``stop_crossings`` per crossing.
@@ -34,6 +37,7 @@ from sumo_avoid.safety.yielding import (
     foe_arrival,
     link_state,
     rows_by_lane,
+    stand_run,
     yields,
 )
 
@@ -112,8 +116,20 @@ def yield_crossings(run: RunResult) -> list[dict]:
             speed = now["speed"].to_numpy(float)
             # a zipper foe that could still stop comfortably lets the ego in (safety.yielding)
             skip = None if lk.state != "Z" else (lambda t_f, r, x: bool(can_give_way(x, speed[r], p.comfort_decel_mps2)))
+            # all-way stop: first come, first served, as the rules layer takes it (yielding.waits_its_turn)
+            order = None
+            if any(f.state == "w" for f in lk.foes):
+                v_e = np.abs(ego["speed"].to_numpy(float)[:k + 1])
+                at = np.flatnonzero((v_e < p.stop_speed_mps) & (lk.s_stop_m - s[:k + 1] - p.stop_margin_m <= p.stop_zone_m))
+                before = traj[traj["step"] <= steps[k]]
+
+                def history(r, before=before, ids=ids):
+                    h = before[before["id"] == ids[r]]
+                    return stand_run(h["time_s"].to_numpy(), h["speed"].to_numpy(float))
+                order = (float(t[k]), float(t[at[0]]) if len(at) else np.inf, history)
             t_f, who = foe_arrival(lk.foes, signals, rows_by_lane(now["lane"].fillna("").to_numpy()), now["lane_pos"].to_numpy(float),
-                                   speed, now["length"].to_numpy(float), set(np.flatnonzero(ids == vid).tolist()), skip)
+                                   speed, now["length"].to_numpy(float), set(np.flatnonzero(ids == vid).tolist()), skip,
+                                   order)
             t_c = critical_gap_s(lk, p)
             out.append({"ego": vid, "junction": lk.junction, "time_s": float(t[k + 1]),
                         "state": link_state(signals, lk.tls, lk.link_index, lk.state),

@@ -63,7 +63,9 @@ def run(scn, *, log_file=None, progress: bool = False, callbacks=()) -> RunResul
     road = Road.from_net_file(scn.net_file)
     walls = square(arena.origin, arena.size_m) if arena is not None else None
     obstacles = tuple(o.polygon for o in spec.obstacles)
-    ctx = Context(spec.sim.seed, spec.sim.step_s, road, walls, obstacles)
+    car = spec.actuator.mode == "kinematic"  # the steering limits controllers plan with
+    steer = (spec.actuator.min_turn_radius_m, spec.actuator.max_yaw_rate_radps) if car else (0.0, float("inf"))
+    ctx = Context(spec.sim.seed, spec.sim.step_s, road, walls, obstacles, *steer)
     controller = controller_for(scn, ctx)
     recorder = Recorder(spec.output.record_radius_m)
     hooks = [StaticObstacles(spec.obstacles, obstacles)] + ([ArenaSpawn(arena, walls, obstacles, ctx.rng(1))] if arena else [])
@@ -82,7 +84,7 @@ def run(scn, *, log_file=None, progress: bool = False, callbacks=()) -> RunResul
         except SumoStartError as e:
             raise sumo_load_error(scn, str(e)) from None
         with sim:
-            stack = assemble(scn, Context(spec.sim.seed, sim.step_s, road, walls, obstacles), controller)
+            stack = assemble(scn, Context(spec.sim.seed, sim.step_s, road, walls, obstacles, *steer), controller)
             for hook in hooks:
                 hook.setup(sim)
             try:

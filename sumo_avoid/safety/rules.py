@@ -49,6 +49,7 @@ from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.polyline import polyline_track
 from sumo_avoid.core.types import EgoTask, Keys
 from sumo_avoid.safety.yielding import (
+    STAND_MPS,
     can_give_way,
     critical_gap_s,
     ego_time_to_line,
@@ -97,7 +98,7 @@ class _Ego:
     s_m: float = 0.0  # front bumper's arc length on task.path, followed step by step
     seen: bool = False
     yellow: dict = field(default_factory=dict)  # link position in task.links -> STOP | GO at the yellow's onset
-    stopped: set = field(default_factory=set)  # link positions of stop signs where the ego has stood
+    stopped: dict = field(default_factory=dict)  # link position of a stop sign where the ego has stood -> since when, s
 
 
 def signal_char(signals, link) -> str:
@@ -132,10 +133,23 @@ class TrafficRulesLayer:
         self._held: set[tuple[str, float]] = set()  # (ego, stop line s) where a signal held the ego
         self._caps = 0
         self._yields: set[tuple[str, float]] = set()  # (ego, stop line s) where the ego gave way
+        self._allway = False  # an ego's route crosses an all-way stop: follow who stands since when
+        self._stand: dict[str, tuple] = {}  # vehicle id -> (start, end (nan: still)) of its last standing run, s
 
     def add_ego(self, task: EgoTask) -> None:
         watch = any(lk.tls or lk.foes or lk.state in STOP_SIGNS for lk in task.links) or self.p.speed_factor is not None
         self._egos[task.vid] = _Ego(task, watch)
+        self._allway |= any(lk.state == "w" and lk.foes for lk in task.links)
+
+    def _track_standing(self, obs) -> None:
+        """When each vehicle came to stand (for the order of arrival at all-way stops)."""
+        snap, t = obs.snapshot, obs.snapshot.time_s
+        for vid, v in zip(snap.ids, snap.speed):
+            start, end = self._stand.get(vid, (math.nan, math.nan))
+            if v < STAND_MPS and not (start == start and end != end):  # not standing yet: a new run starts
+                self._stand[vid] = (t, math.nan)
+            elif v >= STAND_MPS and start == start and end != end:  # standing until now: the run ends
+                self._stand[vid] = (start, t)
 
     def remove_ego(self, vid: str) -> None:
         self._egos.pop(vid, None)
@@ -174,14 +188,16 @@ class TrafficRulesLayer:
             late = v * v / (2.0 * p.commit_decel_mps2) > d
             if k not in e.stopped and link_state(snap.signals, link.tls, link.link_index, link.state) in STOP_SIGNS:
                 if v < p.stop_speed_mps and d - p.stop_margin_m <= p.stop_zone_m:
-                    e.stopped.add(k)  # stood at the sign: from now on it only gives way
+                    e.stopped[k] = snap.time_s  # stood at the sign: from now on it only gives way
                 elif not late:
                     return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
             if not link.foes:
                 continue
             if not yields(link, snap.signals) or late:
                 continue  # priority now, or too late to stop: go on
-            found = foe_arrivals(link.foes, snap.signals, lanes, snap.lane_pos, snap.speed, snap.length, {row})
+            order = (snap.time_s, e.stopped.get(k, math.inf),  # all-way stops: the ego first stood at its line then
+                     lambda r: self._stand.get(snap.ids[r], (math.nan, math.nan)))
+            found = foe_arrivals(link.foes, snap.signals, lanes, snap.lane_pos, snap.speed, snap.length, {row}, order)
             arrivals = [a for a, _, _ in found]
             t_c, t_e = critical_gap_s(link, p), ego_time_to_line(d, v, p.stop_margin_m)
             if link.state == "Z":  # take turns: arrive in the first free slot (yielding.zipper_slot)
@@ -197,6 +213,8 @@ class TrafficRulesLayer:
         snap = obs.snapshot
         out = np.array(command, dtype=float, copy=True)
         lanes = None
+        if self._allway:
+            self._track_standing(obs)
         for i, vid in enumerate(obs.ego_ids):
             e = self._egos.get(vid)
             if e is None or not e.watch:  # no signal on the route, no speed limits enforced: nothing to do

@@ -14,25 +14,17 @@ conflict point by its own length: with x the distance of its front bumper to the
     t_f = max(x, 0) / max(v, v_floor)          (v_floor = 1 m/s: a foe standing right at the
                                                 conflict point counts as arriving now)
 
-The ego, its front bumper d before its stop line at speed v_e, reaches the line in
-t_e = max(d - margin, 0) / max(v_e, v_floor). It must yield while a foe arrives within
-t_e + t_c + t_margin, t_c the critical gap of its movement (left turns and U-turns
-``critical_gap_left_s``, others ``critical_gap_s``; the Highway Capacity Manual's critical headways
-for minor-street and roundabout entries lie around 4-7 s, major-street left turns around 4 s; the
-defaults 4.5 s / 5 s sit in the 4-5 s the project asks for) and t_margin a safety margin against
-foes that speed up. The metric counts a crossing of the stop line as a violation when a foe then
-arrives within t_c (without the margin).
-
-A zipper merge ('Z', two lanes into one) is taken in turn, not by waiting for a 4.5 s gap: its t_c
-is ``zipper_headway_s`` h, and on the way to the merge the ego aims at the earliest arrival time
-t* >= t_e with no foe arriving within h before it, nor within h after it unless that foe *can give
-way* (:func:`zipper_slot`), driving at most (d - margin) / t* while t* > t_e: it slows down to slot
-in behind a foe instead of stopping at the lane's end (an ego on an acceleration lane among 23 m/s
-traffic stood 20 s at its end). A foe can give way when it could still stop comfortably before the
-conflict point, v_f^2 / (2 b_comf) <= x: in turn-taking the one behind lets the other in. Without
-this, an ego in the through lane let every car of a dense ramp stream go first (cars ~2.5 s apart
-never leave a 2 h window) and stood 25 s at the merge while SUMO's cars behind it changed lanes to
-pass (ramp_main seed 1). The metric judges a zipper crossing the same way.
+An **all-way stop** ('w') is first come, first served (:func:`waits_its_turn`). A foe still on its
+way to its stop line that can stop before the conflict point (v^2 / (2 * 4.5 m/s^2) <= x, SUMO's
+default deceleration) will stop there first: no foe yet. A foe standing more than ``AT_LINE_M``
+behind its line is queued: no foe. A foe standing at its line (slower than ``STAND_MPS``) since
+after the ego first stood at its own waits its turn: no foe. Every other foe (standing there since
+before the ego, setting off from its line within ``DEPART_S``, inside the junction) goes first and
+arrives as from a standing start at SUMO's default passenger acceleration a_f = 2.6 m/s^2,
+t_f = (sqrt(v^2 + 2 a_f x) - v) / a_f. With the constant-speed rule a car standing at its line 8 m
+from the conflict point "arrived" in 8 s, the ego went, the car went too, and the two met inside
+the junction (grid08 seed 2); yielding to every standing car instead left the ego and SUMO's cars
+waiting for each other for 100 s (grid08 seed 1: SUMO, too, had the ego first).
 """
 from __future__ import annotations
 
@@ -45,6 +37,38 @@ from sumo_avoid.core.types import FoeLink, RouteLink
 MAJOR = frozenset("GMO")
 CLOSED = frozenset("ru")
 V_FLOOR_MPS = 1.0
+#: A foe setting off from an all-way stop's line accelerates at this (SUMO's default passenger car), m/s^2.
+FOE_START_ACCEL_MPS2 = 2.6
+#: Standing: slower than this (SUMO's waiting-time threshold), m/s.
+STAND_MPS = 0.1
+#: A vehicle whose front is within this of its stop line stands *at* the line, m.
+AT_LINE_M = 5.0
+#: A foe that stood at its line and set off less than this ago is crossing (not braking to stop), s.
+DEPART_S = 5.0
+#: A foe on its way to an all-way stop's line brakes at most this hard (SUMO's default passenger decel), m/s^2.
+FOE_DECEL_MPS2 = 4.5
+
+
+def arrival_time(x_m: float, v_mps: float, allway: bool = False) -> float:
+    """When a foe x metres before the conflict point at speed v gets there, s (module docstring)."""
+    x, v = max(float(x_m), 0.0), float(v_mps)
+    if allway:
+        a = FOE_START_ACCEL_MPS2
+        return (math.sqrt(v * v + 2.0 * a * x) - v) / a
+    return x / max(v, V_FLOOR_MPS)
+
+
+def stand_run(time_s, speed) -> tuple[float, float]:
+    """(start, end) of the last run of standing (speed < STAND_MPS) in this speed history (time
+    order), s; end nan while it still stands, both nan if it never stood."""
+    st = np.asarray(speed, float) < STAND_MPS
+    last = np.flatnonzero(st)
+    if not len(last):
+        return math.nan, math.nan
+    t = np.asarray(time_s, float)
+    moving = np.flatnonzero(~st[:last[-1]])
+    end = math.nan if last[-1] == len(st) - 1 else float(t[last[-1] + 1])
+    return float(t[moving[-1] + 1 if len(moving) else 0]), end
 
 
 def link_state(signals, tls: str, link_index: int, static: str) -> str:
@@ -101,28 +125,46 @@ def rows_by_lane(lanes) -> dict[str, list[int]]:
 
 
 def foe_arrivals(foes: tuple[FoeLink, ...], signals, lanes: dict[str, list[int]], lane_pos, speed, length,
-                 exclude: set[int]) -> list[tuple[float, int, float]]:
+                 exclude: set[int], order=None) -> list[tuple[float, int, float]]:
     """(arrival time t_f at its conflict point, s; row; distance x of its front bumper to it, m) of
     every vehicle of an open foe link that has not passed it. ``lanes`` maps lane ids to rows of the
-    arrays ``lane_pos``, ``speed``, ``length``."""
+    arrays ``lane_pos``, ``speed``, ``length``. At an all-way stop ``order`` = (now, when the ego
+    first stood at its line, history(row) -> (start, end) of the row's last standing run) decides
+    who goes first (module docstring); None: every foe there counts."""
     out = []
     for foe in foes:
         if link_state(signals, foe.tls, foe.link_index, foe.state) in CLOSED:
             continue
+        allway = foe.state == "w"
         for lane, offset in foe.approach:
             for r in lanes.get(lane, ()):
                 x = offset - float(lane_pos[r])
                 if r in exclude or not x > -float(length[r]):
                     continue
-                out.append((max(x, 0.0) / max(float(speed[r]), V_FLOOR_MPS), r, x))
+                v = float(speed[r])
+                if allway and order is not None and waits_its_turn(x - foe.line_m, x, v, *order, r):
+                    continue
+                out.append((arrival_time(x, v, allway), r, x))
     return out
 
 
+def waits_its_turn(to_line_m: float, x_m: float, v_mps: float, now_s: float, ego_first_s: float, history, row) -> bool:
+    """At an all-way stop: whether a foe (its front ``to_line_m`` before its stop line, ``x_m``
+    before the conflict point, at ``v_mps``) goes after the ego: queued behind its line, standing
+    at it since after the ego stood at its own, or still on its way to stop there (it can stop
+    before the conflict point and has not just set off from its line)."""
+    start, end = history(row)
+    if v_mps < STAND_MPS:
+        return to_line_m > AT_LINE_M or (to_line_m >= 0.0 and start > ego_first_s)
+    just_left = to_line_m <= AT_LINE_M and now_s - end <= DEPART_S
+    return to_line_m > 0.0 and bool(can_give_way(x_m, v_mps, FOE_DECEL_MPS2)) and not just_left
+
+
 def foe_arrival(foes: tuple[FoeLink, ...], signals, lanes: dict[str, list[int]], lane_pos, speed, length,
-                exclude: set[int], skip=None) -> tuple[float, int]:
+                exclude: set[int], skip=None, order=None) -> tuple[float, int]:
     """(earliest arrival time t_f of :func:`foe_arrivals`, s; its row), or (inf, -1); ``skip(t, row,
     x)`` leaves arrivals out (e.g. zipper foes that can give way)."""
-    arr = foe_arrivals(foes, signals, lanes, lane_pos, speed, length, exclude)
+    arr = foe_arrivals(foes, signals, lanes, lane_pos, speed, length, exclude, order)
     return min(((t, r) for t, r, x in arr if skip is None or not skip(t, r, x)), default=(math.inf, -1),
                key=lambda a: a[0])
 

@@ -64,7 +64,7 @@ class RightOfWay:
             self._upstream(other.getFromLane(), conflict + other.getFromLane().getLength(), approach)
             tls = other.getTLSID() or ""
             out.append(FoeLink(tls, int(other.getTLLinkIndex()) if tls else -1, other.getState() or "",
-                               other.getDirection() or "", tuple(sorted(approach.items()))))
+                               other.getDirection() or "", tuple(sorted(approach.items())), float(conflict)))
         return tuple(out)
 
     def _upstream(self, lane, offset_m: float, out: dict) -> None:

@@ -48,6 +48,7 @@ class EgoInfo:
     vid: str
     route_edges: tuple[str, ...]
     lane_index: int
+    width_m: float = 1.8
 
 
 def sumo_args(net: pathlib.Path, routes, additional, step_s: float, seed: int, lateral_resolution_m: float,
@@ -102,7 +103,7 @@ class SumoSim:
         libsumo.simulation.subscribe(list(_SIM_VARS))
         self._dims: dict[str, tuple[float, float]] = {}  # id -> (length, width), static
         self._egos: set[str] = set()
-        self._backing: set[str] = set()  # egos last moved with a negative speed (see read)
+        self._applied: dict[str, float] = {}  # ego -> the signed speed it was last moved at (see read)
         self._routes: dict[str, tuple[str, ...]] = {}  # ego -> its route as SUMO gave it at take-over
         self._placement = RoutePlacement()
         self._static_key: tuple[str, ...] | None = None  # read(): libsumo's ids the cached static part is for
@@ -142,9 +143,13 @@ class SumoSim:
         heading = np.radians(90.0 - flat[:, 2])
         direction = np.column_stack([np.cos(heading), np.sin(heading)])
         centre = flat[:, :2] - direction * (dims[:, :1] / 2.0)
-        if self._backing:  # SUMO keeps a moved vehicle's speed >= 0: an ego backing up moves against its heading
-            back = [k for k, v in enumerate(ids) if v in self._backing]
-            flat[back, 3] = 0.0 - flat[back, 3]  # (0.0 - x: no -0.0 in the recording)
+        if self._applied:  # an ego moves at the speed the plug-in applied: SUMO keeps a moved vehicle's speed
+            # >= 0 (an ego backing up moves against its heading) and reads it as 0 at some edge changes
+            # (rand08: 0 m/s on entering a junction's internal lane while it moved at 2.5 m/s)
+            mine = [(k, self._applied[v]) for k, v in enumerate(ids) if v in self._applied]
+            if mine:
+                rows_e, v_e = zip(*mine)
+                flat[list(rows_e), 3] = np.asarray(v_e, float) + 0.0  # (+ 0.0: no -0.0 in the recording)
         return Snapshot(self.time_s, ids, centre, direction * flat[:, 3:4], heading,
                         dims[:, 0], dims[:, 1], is_ego, signals=signals, lane=lane,
                         lane_pos=np.where([bool(x) for x in lane], flat[:, 4], np.nan))
@@ -176,7 +181,7 @@ class SumoSim:
         self._egos.add(vid)
         self._static_key = None
         self._routes[vid] = tuple(libsumo.vehicle.getRoute(vid))
-        return EgoInfo(vid, self._routes[vid], libsumo.vehicle.getLaneIndex(vid))
+        return EgoInfo(vid, self._routes[vid], libsumo.vehicle.getLaneIndex(vid), libsumo.vehicle.getWidth(vid))
 
     def follow_route(self, task: EgoTask) -> None:
         """Keep ego ``task.vid`` on its route in SUMO's view while it drives on it (:mod:`.placement`)."""
@@ -202,14 +207,14 @@ class SumoSim:
                 except libsumo.TraCIException:
                     self._placement.lost(vid)
             prev(vid, v)
-            (self._backing.add if v < 0.0 else self._backing.discard)(vid)
+            self._applied[vid] = v
 
     def release(self, vid: str) -> None:
         """Take a finished ego out of the simulation. Its subscription goes first: libsumo keeps the
         subscription of a vehicle removed by ``remove`` and the next step fails with "Vehicle 'x' is
         not known" (found with two egos, one at its goal while the other drives on)."""
         self._placement.forget(vid)
-        self._backing.discard(vid)
+        self._applied.pop(vid, None)
         if vid in self._egos:
             self._egos.discard(vid)
             self._static_key = None
@@ -229,7 +234,7 @@ class SumoSim:
             self._placement.forget(vid)
             self._dims.pop(vid, None)
             self._egos.discard(vid)
-            self._backing.discard(vid)
+            self._applied.pop(vid, None)
             self._static_key = None
         self._subscribe_new(self.departed())
         t = self.time_s

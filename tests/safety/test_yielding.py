@@ -16,12 +16,15 @@ from sumo_avoid.core.types import FoeLink, RouteLink
 from sumo_avoid.rollout import runner
 from sumo_avoid.safety.rules import RulesParams
 from sumo_avoid.safety.yielding import (
+    arrival_time,
     can_give_way,
     critical_gap_s,
     ego_time_to_line,
     foe_arrival,
     link_state,
     rows_by_lane,
+    stand_run,
+    waits_its_turn,
     yields,
     zipper_slot,
 )
@@ -158,3 +161,33 @@ def test_sumo_sees_the_waiting_ego_on_its_entry_lane_not_on_the_ring(roundabout)
     assert [ln for ln in dict.fromkeys(ego["lane"]) if not ln.startswith(":")] == ["S_in_0", "ring_SE_0", "ring_EN_0", "N_out_0"]
     route_edges = {p.edge for p in res.tasks["ego"].lanes}  # internal lanes of its own links included
     assert {ln.rsplit("_", 1)[0] for ln in ego["lane"].dropna()} <= route_edges
+
+
+def test_all_way_stop_first_come_first_served_by_hand():
+    """yielding.waits_its_turn: (to_line, x, v, now, ego first stood at, history(row) -> (start, end))."""
+    standing_since = lambda start: (lambda r: (start, math.nan))  # noqa: E731
+    assert waits_its_turn(1.0, 12.0, 0.0, 30.0, 20.0, standing_since(25.0), 0)  # came after the ego: waits
+    assert not waits_its_turn(1.0, 12.0, 0.0, 30.0, 20.0, standing_since(15.0), 0)  # came first: goes
+    assert waits_its_turn(8.0, 19.0, 0.0, 30.0, 20.0, standing_since(5.0), 0)  # queued 8 m behind its line
+    never = lambda r: (math.nan, math.nan)  # noqa: E731
+    # braking into its line: 6.45^2 / (2 * 4.5) = 4.62 m <= 16.1 m to the conflict point -> stops first
+    assert waits_its_turn(4.4, 16.1, 6.45, 84.2, 80.0, never, 0)
+    # the same car having set off from its line 2 s ago is crossing
+    assert not waits_its_turn(4.4, 16.1, 6.45, 84.2, 80.0, lambda r: (70.0, 82.2), 0)
+    # too fast to stop before the conflict point: 14^2 / 9 = 21.8 m > 10 m
+    assert not waits_its_turn(2.0, 10.0, 14.0, 84.2, 80.0, never, 0)
+    # the ego has not stood yet (first = inf): a car standing at its line goes first
+    assert not waits_its_turn(0.5, 10.0, 0.0, 30.0, math.inf, standing_since(29.0), 0)
+
+
+def test_arrival_times_and_standing_runs_by_hand():
+    assert arrival_time(8.0, 0.0) == 8.0  # x / max(v, 1 m/s)
+    assert arrival_time(8.0, 4.0) == 2.0
+    assert arrival_time(13.0, 0.0, allway=True) == pytest.approx(math.sqrt(10.0))  # sqrt(2 x / 2.6)
+    assert arrival_time(5.2, 2.6, allway=True) == pytest.approx((math.sqrt(2.6**2 + 2 * 2.6 * 5.2) - 2.6) / 2.6)
+    t = [0.0, 1.0, 2.0, 3.0, 4.0]
+    assert stand_run(t, [5, 0, 0, 3, 3]) == (1.0, 3.0)
+    s, e = stand_run(t, [5, 0, 0, 3, 0])
+    assert s == 4.0 and math.isnan(e)
+    assert stand_run(t, [0, 0, 0, 0, 0])[0] == 0.0
+    assert all(math.isnan(v) for v in stand_run(t, [1, 2, 3, 4, 5]))
