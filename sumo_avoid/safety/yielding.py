@@ -14,14 +14,20 @@ conflict point by its own length: with x the distance of its front bumper to the
     t_f = max(x, 0) / max(v, v_floor)          (v_floor = 1 m/s: a foe standing right at the
                                                 conflict point counts as arriving now)
 
+A foe slower than ``START_MPS`` (5 m/s) whose front is within ``AT_LINE_M`` (5 m) of its stop
+line or past it is setting off from the line (a light turned green, a gap opened): it arrives as
+from a standing start, t_f = (sqrt(v^2 + 2 a_f x) - v) / a_f with SUMO's default passenger
+acceleration a_f = 2.6 m/s^2 (not at zipper merges). With x / max(v, 1 m/s) the car standing
+opposite an ego turning left on a permissive green "arrived" in 5.4 s as the light turned green;
+it set off with the ego and they met in the junction (netgenerate rand06, light 24, seeds 2 and 3).
+
 An **all-way stop** ('w') is first come, first served (:func:`waits_its_turn`). A foe still on its
 way to its stop line that can stop before the conflict point (v^2 / (2 * 4.5 m/s^2) <= x, SUMO's
 default deceleration) will stop there first: no foe yet. A foe standing more than ``AT_LINE_M``
 behind its line is queued: no foe. A foe standing at its line (slower than ``STAND_MPS``) since
 after the ego first stood at its own waits its turn: no foe. Every other foe (standing there since
 before the ego, setting off from its line within ``DEPART_S``, inside the junction) goes first and
-arrives as from a standing start at SUMO's default passenger acceleration a_f = 2.6 m/s^2,
-t_f = (sqrt(v^2 + 2 a_f x) - v) / a_f. With the constant-speed rule a car standing at its line 8 m
+arrives as from a standing start (above). With the constant-speed rule a car standing at its line 8 m
 from the conflict point "arrived" in 8 s, the ego went, the car went too, and the two met inside
 the junction (grid08 seed 2); yielding to every standing car instead left the ego and SUMO's cars
 waiting for each other for 100 s (grid08 seed 1: SUMO, too, had the ego first).
@@ -43,16 +49,19 @@ FOE_START_ACCEL_MPS2 = 2.6
 STAND_MPS = 0.1
 #: A vehicle whose front is within this of its stop line stands *at* the line, m.
 AT_LINE_M = 5.0
+#: A foe slower than this within AT_LINE_M of its stop line (or past it) is setting off from it, m/s.
+START_MPS = 5.0
 #: A foe that stood at its line and set off less than this ago is crossing (not braking to stop), s.
 DEPART_S = 5.0
 #: A foe on its way to an all-way stop's line brakes at most this hard (SUMO's default passenger decel), m/s^2.
 FOE_DECEL_MPS2 = 4.5
 
 
-def arrival_time(x_m: float, v_mps: float, allway: bool = False) -> float:
-    """When a foe x metres before the conflict point at speed v gets there, s (module docstring)."""
+def arrival_time(x_m: float, v_mps: float, starting: bool = False) -> float:
+    """When a foe x metres before the conflict point at speed v gets there, s: at constant speed, or
+    ``starting`` (setting off from its line) accelerating at FOE_START_ACCEL_MPS2 (module docstring)."""
     x, v = max(float(x_m), 0.0), float(v_mps)
-    if allway:
+    if starting:
         a = FOE_START_ACCEL_MPS2
         return (math.sqrt(v * v + 2.0 * a * x) - v) / a
     return x / max(v, V_FLOOR_MPS)
@@ -144,7 +153,9 @@ def foe_arrivals(foes: tuple[FoeLink, ...], signals, lanes: dict[str, list[int]]
                 v = float(speed[r])
                 if allway and order is not None and waits_its_turn(x - foe.line_m, x, v, *order, r):
                     continue
-                out.append((arrival_time(x, v, allway), r, x))
+                # at (or just past) its stop line and slow: it is setting off, not cruising
+                starting = allway or (foe.state != "Z" and x - foe.line_m <= AT_LINE_M and v < START_MPS)
+                out.append((arrival_time(x, v, starting), r, x))
     return out
 
 

@@ -183,11 +183,24 @@ def test_all_way_stop_first_come_first_served_by_hand():
 def test_arrival_times_and_standing_runs_by_hand():
     assert arrival_time(8.0, 0.0) == 8.0  # x / max(v, 1 m/s)
     assert arrival_time(8.0, 4.0) == 2.0
-    assert arrival_time(13.0, 0.0, allway=True) == pytest.approx(math.sqrt(10.0))  # sqrt(2 x / 2.6)
-    assert arrival_time(5.2, 2.6, allway=True) == pytest.approx((math.sqrt(2.6**2 + 2 * 2.6 * 5.2) - 2.6) / 2.6)
+    assert arrival_time(13.0, 0.0, starting=True) == pytest.approx(math.sqrt(10.0))  # sqrt(2 x / 2.6)
+    assert arrival_time(5.2, 2.6, starting=True) == pytest.approx((math.sqrt(2.6**2 + 2 * 2.6 * 5.2) - 2.6) / 2.6)
     t = [0.0, 1.0, 2.0, 3.0, 4.0]
     assert stand_run(t, [5, 0, 0, 3, 3]) == (1.0, 3.0)
     s, e = stand_run(t, [5, 0, 0, 3, 0])
     assert s == 4.0 and math.isnan(e)
     assert stand_run(t, [0, 0, 0, 0, 0])[0] == 0.0
     assert all(math.isnan(v) for v in stand_run(t, [1, 2, 3, 4, 5]))
+
+
+def test_a_slow_foe_at_its_stop_line_is_setting_off():
+    """Within 5 m of its line (line_m = 10 m before the conflict point) and slower than 5 m/s: a
+    standing start; farther back, or at a zipper merge: constant speed (x / max(v, 1 m/s))."""
+    lanes = {"a_0": [0]}
+    def first(state, lane_pos, v):  # noqa: E306
+        foe = FoeLink(state=state, approach=(("a_0", 100.0),), line_m=10.0)
+        return foe_arrival((foe,), {}, lanes, np.array([lane_pos]), np.array([v]), np.array([5.0]), set())[0]
+    assert first("M", 88.0, 2.0) == pytest.approx((math.sqrt(4.0 + 2 * 2.6 * 12.0) - 2.0) / 2.6)  # 3 m before its line
+    assert first("M", 70.0, 2.0) == pytest.approx(15.0)  # 20 m before it: 30 m / 2 m/s
+    assert first("M", 88.0, 6.0) == pytest.approx(2.0)  # not slow: 12 m / 6 m/s
+    assert first("Z", 88.0, 2.0) == pytest.approx(6.0)  # zipper: 12 m / 2 m/s
