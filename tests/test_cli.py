@@ -120,7 +120,7 @@ def test_an_unknown_edge_in_a_trip_names_the_route_file_and_the_trip(tmp_path):
     path.write_text(f'name = "trip"\n[sim]\nnet = "{NETS / "overtaking.net.xml"}"\n'
                     'routes = ["types.rou.xml", "trips.rou.xml"]\n[ego]\nids = ["ego"]\n')
     out = tmp_path / "out"
-    r = cli("run", path, "--out", out)
+    r = cli_in_process("run", path, "--out", out)
     assert r.returncode == 2
     line, = r.stderr.strip().splitlines()
     assert line == (f"sumo-avoid: error: {path}: key 'sim.routes[1]': expected a file SUMO can load: "
@@ -159,7 +159,7 @@ def test_input_sumo_rejects_only_mid_run_exits_2_naming_the_file_and_writes_noth
     it is found before SUMO starts."""
     path = _road_scenario(tmp_path, "lane", '<trip id="ego" from="road" to="road" depart="1" departLane="7"/>', ["ego"])
     out = tmp_path / "out"
-    r = cli("run", path, "--out", out, "--quiet")
+    r = cli_in_process("run", path, "--out", out, "--quiet")
     assert r.returncode == 2, r.stderr
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"sumo-avoid: error: {path}: key 'sim.routes[0]': "), lines
