@@ -58,16 +58,24 @@ _STARTS_SUMO = ("runner.run", "run_scenario", "SumoSim", "main([", "run_batch", 
 
 def pytest_collection_modifyitems(items):
     """Mark the tests that start SUMO (``pytest -m "not sumo"`` runs the pure ones in seconds): a test
-    whose own source, or a module-level helper it calls, starts a simulation or a CLI process."""
+    whose own source, or a module-level helper it calls, starts a simulation or a CLI process.
+    Sources are read once per function and helpers listed once per module (a parametrised test
+    is one function for all its cases)."""
+    import functools
     import inspect
+
+    source = functools.cache(inspect.getsource)
+
+    @functools.cache
+    def helpers(module) -> tuple:
+        return tuple(h for h in (getattr(module, n, None) for n in list(module.__dict__) if n.startswith("_") or n.islower())
+                     if inspect.isfunction(h) and h.__module__ == module.__name__)
 
     for item in items:
         fn = getattr(item, "function", None)
         if fn is None or item.get_closest_marker("sumo"):
             continue
-        src = inspect.getsource(fn)
-        helpers = [getattr(item.module, n, None) for n in item.module.__dict__ if n.startswith("_") or n.islower()]
-        called = [inspect.getsource(h) for h in helpers
-                  if inspect.isfunction(h) and h.__module__ == item.module.__name__ and f"{h.__name__}(" in src]
+        src = source(fn)
+        called = [source(h) for h in helpers(item.module) if f"{h.__name__}(" in src]
         if any(k in text for text in [src, *called] for k in _STARTS_SUMO) or "scenario_path" in item.fixturenames:
             item.add_marker("sumo")

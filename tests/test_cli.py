@@ -120,7 +120,7 @@ def test_an_unknown_edge_in_a_trip_names_the_route_file_and_the_trip(tmp_path):
     path.write_text(f'name = "trip"\n[sim]\nnet = "{NETS / "overtaking.net.xml"}"\n'
                     'routes = ["types.rou.xml", "trips.rou.xml"]\n[ego]\nids = ["ego"]\n')
     out = tmp_path / "out"
-    r = cli("run", path, "--out", out)
+    r = cli_in_process("run", path, "--out", out)
     assert r.returncode == 2
     line, = r.stderr.strip().splitlines()
     assert line == (f"sumo-avoid: error: {path}: key 'sim.routes[1]': expected a file SUMO can load: "
@@ -141,17 +141,17 @@ def _road_scenario(tmp_path, name: str, vehicles: str, ego_ids) -> pathlib.Path:
 
 def test_an_ego_that_never_departs_exits_2_and_writes_nothing(tmp_path):
     path = _road_scenario(tmp_path, "late", '<trip id="ego" from="road" to="road" depart="0"/>\n'
-                          '  <trip id="late" from="road" to="road" depart="60"/>', ["ego", "late"])
+                          '  <trip id="late" from="road" to="road" depart="5"/>', ["ego", "late"])
     out = tmp_path / "out"
     out.mkdir()  # an existing folder stays as it was: empty
-    r = cli("run", path, "--out", out, "--quiet")
+    r = cli_in_process("run", path, "--out", out, "--quiet")  # found from the route file, before SUMO starts
     assert r.returncode == 2, r.stderr
-    assert r.stderr.strip().splitlines() == [  # found from the route file, before SUMO starts
+    assert r.stderr.strip().splitlines() == [
         (f"sumo-avoid: error: {path}: key 'ego.ids[1]': expected egos that depart within the run: 'late' departs "
-         "at t=60 s, the run ends at sim.duration_s = 3 s")]
+         "at t=5 s, the run ends at sim.duration_s = 3 s")]
     assert list(out.iterdir()) == []
-    r = cli("run", path, "--out", tmp_path / "ok", "--quiet", "--no-plots", "--set", "sim.duration_s=61")
-    assert r.returncode == 0, r.stderr  # it departs at 60 s: a normal run
+    r = cli("run", path, "--out", tmp_path / "ok", "--quiet", "--no-plots", "--set", "sim.duration_s=6")
+    assert r.returncode == 0, r.stderr  # it departs at 5 s: a normal run
 
 
 def test_input_sumo_rejects_only_mid_run_exits_2_naming_the_file_and_writes_nothing(tmp_path):
@@ -159,7 +159,7 @@ def test_input_sumo_rejects_only_mid_run_exits_2_naming_the_file_and_writes_noth
     it is found before SUMO starts."""
     path = _road_scenario(tmp_path, "lane", '<trip id="ego" from="road" to="road" depart="1" departLane="7"/>', ["ego"])
     out = tmp_path / "out"
-    r = cli("run", path, "--out", out, "--quiet")
+    r = cli_in_process("run", path, "--out", out, "--quiet")
     assert r.returncode == 2, r.stderr
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"sumo-avoid: error: {path}: key 'sim.routes[0]': "), lines

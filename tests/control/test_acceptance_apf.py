@@ -3,12 +3,17 @@ minimum, and scripted crashes on a straight road and inside the junction."""
 import pytest
 from conftest import run_scenario
 
-SEEDS = range(1, 11)
+# per scenario, the two seeds on which APF-SA passed closest in the 10-seed study (reports/apf_study/ledger.csv:
+# overtaking 8 at 1.63 m and 10 at 1.70 m, left_turn 8 at 1.23 m and 1 at 1.28 m)
+SEEDS = {"overtaking": (8, 10), "left_turn": (8, 1)}
 
 
-@pytest.mark.parametrize("name", ["overtaking", "left_turn"])
-@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("name, seed", [(n, s) for n, seeds in SEEDS.items() for s in seeds])
 def test_apf_sa_reaches_goal_safely(name, seed):
+    """Seeds 1-10 of both scenarios (and of local_minimum, with plain APF beside) are a study, not
+    a test: reports/apf_study/ (summary.md, ledger.csv), made with
+    ``sumo-avoid batch scenarios/overtaking.toml scenarios/left_turn.toml scenarios/local_minimum.toml
+    --seeds 1-10 --controller apf --controller apf_sa --workers 2 --ledger reports/apf_study/ledger.sqlite``."""
     _, m = run_scenario(name, controller="apf_sa", seed=seed)
     assert m["goal_reached"] is True
     assert m["collisions"] == 0
@@ -45,12 +50,13 @@ def test_same_seed_gives_identical_metrics_json(tmp_path):
 
     from conftest import SCENARIOS
 
-    outs = []
-    for k in range(2):
-        out = tmp_path / f"run{k}"
-        subprocess.run([sys.executable, "-m", "sumo_avoid.cli", "run", str(SCENARIOS / "overtaking.toml"),
-                        "--seed", "3", "--out", str(out), "--no-plots", "--quiet"], check=True,
-                       capture_output=True)
-        outs.append((out / "metrics.json").read_bytes())
+    # two fresh interpreters, side by side (independent processes: one wall time, not two)
+    procs = [subprocess.Popen([sys.executable, "-m", "sumo_avoid.cli", "run", str(SCENARIOS / "overtaking.toml"),
+                               "--seed", "3", "--out", str(tmp_path / f"run{k}"), "--no-plots", "--quiet"],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.PIPE) for k in range(2)]
+    for p in procs:
+        _, err = p.communicate(timeout=300)
+        assert p.returncode == 0, err
+    outs = [(tmp_path / f"run{k}" / "metrics.json").read_bytes() for k in range(2)]
     assert outs[0] == outs[1]
     assert b'"collisions"' in outs[0]

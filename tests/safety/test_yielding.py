@@ -129,9 +129,16 @@ def _run(d, rules):
     return outputs.run_metrics(runner.run(_scenario(d, rules)))
 
 
+@pytest.fixture(scope="module")
+def with_rules(roundabout):
+    """The run with the traffic-rules layer, shared by the two tests that assert on it."""
+    res = runner.run(_scenario(roundabout, "traffic"))
+    return res, outputs.run_metrics(res)
+
+
 @pytest.mark.sumo
-def test_roundabout_entry_waits_for_the_circulating_vehicle(roundabout):
-    m = _run(roundabout, "traffic")
+def test_roundabout_entry_waits_for_the_circulating_vehicle(with_rules):
+    _, m = with_rules
     (entry,) = m["yield_crossings"]
     assert entry["junction"] == "rS" and entry["state"] == "m"
     assert m["rules_yields"] == 1 and m["yield_violations"] == 0
@@ -149,10 +156,10 @@ def test_without_the_rules_layer_the_ego_cuts_in_and_the_metric_says_so(roundabo
 
 
 @pytest.mark.sumo
-def test_sumo_sees_the_waiting_ego_on_its_entry_lane_not_on_the_ring(roundabout):
+def test_sumo_sees_the_waiting_ego_on_its_entry_lane_not_on_the_ring(with_rules):
     """Placement on the route (moveToXY keepRoute=1): while the ego waits at the entry, SUMO has it
     on the entry lane, so the circulating car is not held up by a phantom on the ring."""
-    res = runner.run(_scenario(roundabout, "traffic"))
+    res, _ = with_rules
     t = res.traj
     ego, circ = t[t["id"] == "ego"], t[t["id"] == "circ"]
     waiting = ego[(ego["speed"] < 2.0) & (ego["time_s"] > 5.0) & (ego["time_s"] < 13.0)]  # slowed at the entry

@@ -46,8 +46,16 @@ def test_radar_brake_without_the_layer_crashes_at_100(tmp_path):
 # route at the ego, not the ego's momentary heading, (1) for the boxes the controller avoids (seed
 # 1 pulled out at 2 m/s in front of car2 closing at 13 m/s) and (2) for coasting remembered
 # returns (seed 7 steered into car3 beside it, whose coasted track had drifted sideways).
-@pytest.mark.parametrize("seed", range(1, 11))
+RADAR_SEEDS = (1, 3, 7)
+
+
+@pytest.mark.parametrize("seed", RADAR_SEEDS)
 def test_overtaking_on_radar_reaches_goal(seed):
+    """Seeds 1 and 7 are the two that collided before the fixes above; seed 3 passed closest (0.43 m)
+    in the 10-seed study. All 10 seeds, truth beside radar, are a study, not a test
+    (reports/radar_study/overtaking_front.csv):
+    ``python -m sumo_avoid.studies.radar_study scenarios/overtaking.toml --seeds 1-10
+    --csv reports/radar_study/overtaking_front.csv``."""
     scn = scenario.load(SCN / "overtaking.toml", ['ego.sensor="radar"'], seed=seed)
     m = evaluate.run_metrics(runner.run(scn))
     assert "radar_warnings" in m and "min_danger_time_s" in m
