@@ -41,16 +41,15 @@ import numpy as np
 from sumo_avoid.control import formation_field as ff
 from sumo_avoid.control import formation_shield as shield
 from sumo_avoid.control.formation_road import RoadFrame
+from sumo_avoid.control.formation_sense import ObstacleLists
 from sumo_avoid.core.config import FieldError, field_doc
 from sumo_avoid.core.geometry import (
     convex_distance,
     footprint_corners,
-    pad_polygons,
     unit_norm,
     wrap_angle,
 )
 from sumo_avoid.core.types import EgoTask, Keys, Needs, Observation
-from sumo_avoid.sensing.perception import radar_obstacles
 from sumo_avoid.sensing.v2v import V2VParams
 
 
@@ -83,8 +82,8 @@ class FormationParams:
     wait_gain_pm: float = field_doc(0.1, doc="leader slows by this per metre of followers' RMS slot error, 1/m")
     wait_free_m: float = field_doc(2.0, doc="... beyond this RMS slot error, m")
     wait_min: float = field_doc(0.3, positive=True, doc="... down to this fraction of its speed, 1")
-    carrot_m: float = field_doc(30.0, positive=True, doc="road: the leader aims this far ahead, across at the centre "
-                                                        "of the free gap ahead, until its goal is nearer, m")
+    carrot_m: float = field_doc(30.0, positive=True, doc="road: the leader aims this far ahead (across: by kappa, "
+                                                        "formation_road.RoadFrame.carrot) until its goal is nearer, m")
     lookahead_m: float = field_doc(25.0, positive=True, doc="W_max: obstacles up to this far ahead of the leader, m")
     window_m: float = field_doc(30.0, positive=True, doc="W_max: half width of the window across the heading, m")
     clear_m: float = field_doc(1.0, doc="kappa 2: clearance kept to the obstacles on each side, m")
@@ -147,7 +146,7 @@ def forward_cone(v, heading: float, max_turn: float) -> np.ndarray:
     return float(np.hypot(*v)) * np.array([np.cos(a), np.sin(a)])
 
 
-class FormationController:
+class FormationController(ObstacleLists):
     """Leader-follower formation with the goal-aware field, width ratio gamma and modes kappa (SPEC §3)."""
 
     needs = Needs(goals=True, v2v=True)
@@ -171,13 +170,6 @@ class FormationController:
         self.gamma_min_seen = np.inf
         self.last = {}  # the last step's gamma, W, W_max, gamma_min (tests, plots)
 
-    def _set_static(self, polys) -> None:
-        self.static = tuple(polys)
-        self._static_polys = pad_polygons(self.static) if self.static else np.zeros((0, 4, 2))
-        self._static_c = np.array([o.mean(axis=0) for o in self.static]).reshape(-1, 2)
-        self._static_r = np.array([np.hypot(*(o - o.mean(axis=0)).T).max() for o in self.static])
-        self._bridges = None  # (hulls, pairs) of the gaps no member's disc passes: ff.bridges, at the first step
-
     def v2v_params(self) -> V2VParams:
         return V2VParams(self.p.delay_s, self.p.pos_noise_m, self.p.vel_noise_mps, 0.0, 0.1, 0.0)
 
@@ -196,75 +188,6 @@ class FormationController:
 
     def tables(self) -> dict:
         return {}
-
-    def _obstacles(self, obs: Observation, lead_row, member_pos):
-        """(polys (O,K,2), mask (E,O) which ego's field feels which, leader's (O,) bool, static (O,) bool,
-        velocities (O,2), shield mask (E,O)). The leader's list is shared with every member (V2V); what a
-        follower senses itself (its radar; truth: within ``sense_radius_m`` of it) it adds for itself (a
-        follower strung out 50 m behind the leader, its field blind to what it passed, was driven into
-        obstacles the shield then held it at for good: arena seed 46). The hulls over gaps too narrow to
-        pass (:meth:`_shut_gaps`) go to the field alone."""
-        snap, E = obs.snapshot, len(obs.ego_ids)
-        parts, know, vel, shut = [], [], [], []  # know (E, n): which member knows which; shut: a hull
-        if obs.detections is None:  # around every member
-            where, r = snap.pos[obs.ego_rows], self.p.sense_radius_m
-            lead = lead_row is not None and self.road is None  # on a road everyone shares everything
-            lk = int(np.flatnonzero(np.asarray(obs.ego_rows) == lead_row)[0]) if lead else None
-            if len(self.static):
-                k = np.hypot(*(self._static_c[None] - where[:, None]).transpose(2, 0, 1)) - self._static_r <= r
-                k = k | k[lk] if lead else k.any(axis=0)[None].repeat(E, axis=0)
-                near = k.any(axis=0)
-                parts.append(self._static_polys[near])
-                know.append(k[:, near])
-                vel.append(np.full((int(near.sum()), 2), np.nan))  # NaN: a static obstacle
-                hulls, hk = self._shut_gaps(k, snap.length[obs.ego_rows], snap.width[obs.ego_rows])
-                parts.append(hulls)
-                know.append(hk)
-                vel.append(np.full((len(hulls), 2), np.nan))
-                shut.append(np.r_[np.zeros(int(near.sum()), bool), np.ones(len(hulls), bool)])
-            members = set(self.order)
-            o = np.array([k for k, v in enumerate(snap.ids) if v not in members], int)
-            if len(o):
-                k = np.hypot(*(snap.pos[o][None] - where[:, None]).transpose(2, 0, 1)) <= r
-                o, k = o[k.any(axis=0)], k[:, k.any(axis=0)]
-                ahead = self.p.predict_s * snap.vel[o]  # each as the box it sweeps within predict_s
-                parts.append(footprint_corners(snap.pos[o] + 0.5 * ahead, snap.heading[o],
-                                               snap.length[o] + np.hypot(*ahead.T), snap.width[o]))
-                know.append(k | k[lk] if lead else np.ones_like(k))
-                vel.append(snap.vel[o] * (self.p.predict_s <= 0))  # a swept box stands still
-                shut.append(np.zeros(len(o), bool))
-            lead_k = lk
-        else:
-            corners, rv, who = radar_obstacles(obs, member_pos, self.p.v2v_gate_m)
-            lead_k = obs.ego_ids.index(snap.ids[lead_row]) if lead_row is not None else None
-            parts.append(corners)
-            vel.append(rv)
-            mine = np.asarray(who)[None, :] == np.arange(E)[:, None]
-            know.append(mine | (mine[lead_k] if lead_k is not None else False))
-            shut.append(np.zeros(len(who), bool))
-        keep = [i for i, x in enumerate(parts) if len(x)]
-        if not keep:
-            e = np.zeros((E, 0), bool)
-            return np.zeros((0, 4, 2)), e, np.zeros(0, bool), np.zeros(0, bool), np.zeros((0, 2)), e
-        polys = pad_polygons([pg for i in keep for pg in parts[i]])
-        know = np.concatenate([know[i] for i in keep], axis=1)
-        vel = np.concatenate([vel[i] for i in keep]).reshape(-1, 2)
-        shut = np.concatenate(shut) if shut else np.zeros(len(polys), bool)
-        static = np.isnan(vel[:, 0])
-        lead_knows = know[lead_k] & ~shut if lead_k is not None else np.zeros(len(polys), bool)
-        return polys, know, lead_knows, static, np.where(static[:, None], 0.0, vel), know & ~shut[None]
-
-    def _shut_gaps(self, know, length, width):
-        """Hulls closing the gaps between the static obstacles that no member's disc passes
-        (:func:`.formation_field.bridges`; the field goes round them, the shield still sees only the
-        obstacles): ((B, H, 2), (E, B) which member knows both obstacles, from ``know`` (E, O))."""
-        if self._bridges is None:
-            r = float(0.5 * np.hypot(length, width).max())
-            self._bridges = ff.bridges(self._static_polys, 2.0 * (r + self.p.shield_margin_m))
-        hulls, pairs = self._bridges
-        hk = know[:, pairs[:, 0]] & know[:, pairs[:, 1]]
-        used = hk.any(axis=0)
-        return hulls[used], hk[:, used]
 
     def _repulsion(self, pos, heading, length, width, goal, polys, mask) -> np.ndarray:
         """Goal-aware repulsion (E,2) of each ego from the obstacles it feels, before the reshaping."""
@@ -342,7 +265,7 @@ class FormationController:
         self.scale = min(target, self.scale + p.widen_rate_ps * self.step_s) if target > self.scale else target
         self.kappa_steps[self.kappa - 1] += 1
         self.gamma_min_seen = min(self.gamma_min_seen, gamma)
-        self.last = {"gap_centre": 0.5 * (gap_lo + gap_hi), "gamma": gamma, "W": W, "W_now": ff.formation_width(rel_lat, width), "W_max": W_max,
+        self.last = {"gap": (gap_lo, gap_hi), "gamma": gamma, "W": W, "W_now": ff.formation_width(rel_lat, width), "W_max": W_max,
                      "gamma_min": g_min, "kappa": self.kappa}
 
     def _extend_trail(self, pos) -> None:
@@ -373,7 +296,7 @@ class FormationController:
         goals = self.road.to_frenet(goals, self.road.s_lead)
         if lk is not None:
             goals[lk] = self.road.carrot(fobs.snapshot.pos[obs.ego_rows[lk]], goals[lk], self.p.carrot_m,
-                                         self.last.get("gap_centre", 0.0))
+                                         self.last.get("gap", (0.0, 0.0)), self.kappa)
         return self.road.leave(fobs, self._act(fobs, goals))
 
     def _act(self, obs: Observation, goals) -> np.ndarray:
