@@ -82,8 +82,8 @@ class FormationParams:
     wait_gain_pm: float = field_doc(0.1, doc="leader slows by this per metre of followers' RMS slot error, 1/m")
     wait_free_m: float = field_doc(2.0, doc="... beyond this RMS slot error, m")
     wait_min: float = field_doc(0.3, positive=True, doc="... down to this fraction of its speed, 1")
-    carrot_m: float = field_doc(30.0, positive=True, doc="road: the leader aims this far ahead (across: by kappa, "
-                                                        "formation_road.RoadFrame.carrot) until its goal is nearer, m")
+    carrot_m: float = field_doc(30.0, positive=True, doc="road: the leader aims this far ahead, across at the centre "
+                                                        "of the free gap ahead, until its goal is nearer, m")
     lookahead_m: float = field_doc(25.0, positive=True, doc="W_max: obstacles up to this far ahead of the leader, m")
     window_m: float = field_doc(30.0, positive=True, doc="W_max: half width of the window across the heading, m")
     clear_m: float = field_doc(1.0, doc="kappa 2: clearance kept to the obstacles on each side, m")
@@ -265,7 +265,7 @@ class FormationController(ObstacleLists):
         self.scale = min(target, self.scale + p.widen_rate_ps * self.step_s) if target > self.scale else target
         self.kappa_steps[self.kappa - 1] += 1
         self.gamma_min_seen = min(self.gamma_min_seen, gamma)
-        self.last = {"gap": (gap_lo, gap_hi), "gamma": gamma, "W": W, "W_now": ff.formation_width(rel_lat, width), "W_max": W_max,
+        self.last = {"gap_centre": 0.5 * (gap_lo + gap_hi), "gamma": gamma, "W": W, "W_now": ff.formation_width(rel_lat, width), "W_max": W_max,
                      "gamma_min": g_min, "kappa": self.kappa}
 
     def _extend_trail(self, pos) -> None:
@@ -296,7 +296,7 @@ class FormationController(ObstacleLists):
         goals = self.road.to_frenet(goals, self.road.s_lead)
         if lk is not None:
             goals[lk] = self.road.carrot(fobs.snapshot.pos[obs.ego_rows[lk]], goals[lk], self.p.carrot_m,
-                                         self.last.get("gap", (0.0, 0.0)), self.kappa)
+                                         self.last.get("gap_centre", 0.0))
         return self.road.leave(fobs, self._act(fobs, goals))
 
     def _act(self, obs: Observation, goals) -> np.ndarray:

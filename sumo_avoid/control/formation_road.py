@@ -37,7 +37,6 @@ class RoadFrame:
     def __init__(self, leader: EgoTask):
         self.view = RoadView(leader)
         self.lanes = Carriageway(leader.lanes) if leader.lanes else None
-        self.pieces = tuple(leader.lanes)
         self.s_lead = 0.0
 
     def to_frenet(self, xy, hint: float) -> np.ndarray:
@@ -91,39 +90,13 @@ class RoadFrame:
             & (polys[:, :, 1].max(axis=1) > q[1] - h) & (polys[:, :, 1].min(axis=1) < q[1] + h)
         return out
 
-    def carrot(self, q, goal, lookahead_m: float, gap, kappa: int) -> np.ndarray:
-        """The leader's goal on a road: ``lookahead_m`` (``carrot_m``) ahead of it, until its goal is
-        nearer than that; across, in the free gap ahead (``gap`` (lo, hi) relative to it, from W_max):
-        kappa 1: at the goal's d, the formation keeping its lanes (the gap's centre if the goal's d is
-        not in the gap); kappa 2: at the gap's centre, where the whole gap counts; kappa 3: at the centre
-        of a lane wholly inside the gap (its own if it is in one, else the one nearest the gap's centre),
-        since a broken-up formation passes in a column in one lane (aiming at the gap's centre, the leader
-        stood between two lanes at the one-lane closure, SUMO's cars in the free lane waiting beside and
-        behind it: gridlock, seeds 1 and 4); the gap's centre if no lane fits."""
+    @staticmethod
+    def carrot(q, goal, lookahead_m: float, gap_centre: float) -> np.ndarray:
+        """The leader's goal on a road: ``lookahead_m`` (``carrot_m``) ahead of it, across at the centre of the free
+        gap ahead (``gap_centre`` relative to it, from W_max), until the goal is nearer than that."""
         if goal[0] - q[0] <= lookahead_m:
             return goal
-        lo, hi = q[1] + gap[0], q[1] + gap[1]
-        s, d = q[0] + lookahead_m, 0.5 * (lo + hi)
-        if kappa == 1 and lo <= goal[1] <= hi:
-            d = float(goal[1])
-        elif kappa == 3:
-            c, w = self.lanes_at(s)
-            fit = (c - 0.5 * w >= lo) & (c + 0.5 * w <= hi)
-            own = fit & (np.abs(c - q[1]) <= 0.5 * w)
-            if own.any():
-                d = float(c[own][0])
-            elif fit.any():
-                d = float(c[fit][np.argmin(np.abs(c[fit] - d))])
-        return np.array([s, d])
-
-    def lanes_at(self, s: float) -> tuple[np.ndarray, np.ndarray]:
-        """(centres d, widths) of the lanes of the leader's edge at arc length s (none in a junction), m."""
-        for p in self.pieces:
-            if p.s_start_m <= s <= p.s_end_m and not p.edge.startswith(":"):
-                f = (s - p.s_start_m) / max(p.s_end_m - p.s_start_m, 1e-9)
-                c = (1.0 - f) * np.asarray(p.offsets_start_m, float) + f * np.asarray(p.offsets_end_m, float)
-                return c, np.asarray(p.widths_m, float)
-        return np.zeros(0), np.zeros(0)
+        return np.array([q[0] + lookahead_m, q[1] + gap_centre])
 
     def walls(self, pos, heading, length, width, margin_m: float, k_ps: float):
         """Barrier constraints of the corridor's bounds for the members (frame coordinates):
