@@ -41,16 +41,15 @@ import numpy as np
 from sumo_avoid.control import formation_field as ff
 from sumo_avoid.control import formation_shield as shield
 from sumo_avoid.control.formation_road import RoadFrame
+from sumo_avoid.control.formation_sense import ObstacleLists
 from sumo_avoid.core.config import FieldError, field_doc
 from sumo_avoid.core.geometry import (
     convex_distance,
     footprint_corners,
-    pad_polygons,
     unit_norm,
     wrap_angle,
 )
 from sumo_avoid.core.types import EgoTask, Keys, Needs, Observation
-from sumo_avoid.sensing.perception import radar_obstacles
 from sumo_avoid.sensing.v2v import V2VParams
 
 
@@ -101,6 +100,10 @@ class FormationParams:
     sense_radius_m: float = field_doc(40.0, positive=True, doc="truth: the leader knows obstacles within this range, m")
     shield_k_ps: float = field_doc(0.5, positive=True, doc="safety shield: approach speed to a hazard at most this "
                                                           "times the free distance beyond the margin, 1/s")
+    shield_members: str = field_doc("disc", doc="safety shield: members against each other as 'disc' (the disc "
+                                                "of the half diagonal, safe at any heading: a slow member's heading "
+                                                "can swing round in a step with the relaxation actuator) or "
+                                                "'footprint' (cars: bounded yaw rate; lane-wide slots on a road)")
     shield_margin_m: float = field_doc(0.3, doc="safety shield: free distance kept to obstacles (disc of the half "
                                                 "diagonal) and vehicles (footprints), m")
     v2v_gate_m: float = field_doc(4.0, positive=True, doc="radar: a return this close to a member's V2V position "
@@ -110,6 +113,8 @@ class FormationParams:
     vel_noise_mps: float = field_doc(0.0, doc="V2V: std of Gaussian noise on members' velocities, m/s")
 
     def __post_init__(self):
+        if self.shield_members not in ("disc", "footprint"):
+            raise FieldError("shield_members", "'disc' or 'footprint'", self.shield_members)
         if self.broken not in ("slots", "trail"):
             raise FieldError("broken", "'slots' or 'trail'", self.broken)
         if self.shape not in ff.SHAPES:
@@ -141,7 +146,7 @@ def forward_cone(v, heading: float, max_turn: float) -> np.ndarray:
     return float(np.hypot(*v)) * np.array([np.cos(a), np.sin(a)])
 
 
-class FormationController:
+class FormationController(ObstacleLists):
     """Leader-follower formation with the goal-aware field, width ratio gamma and modes kappa (SPEC §3)."""
 
     needs = Needs(goals=True, v2v=True)
@@ -165,12 +170,6 @@ class FormationController:
         self.gamma_min_seen = np.inf
         self.last = {}  # the last step's gamma, W, W_max, gamma_min (tests, plots)
 
-    def _set_static(self, polys) -> None:
-        self.static = tuple(polys)
-        self._static_polys = pad_polygons(self.static) if self.static else np.zeros((0, 4, 2))
-        self._static_c = np.array([o.mean(axis=0) for o in self.static]).reshape(-1, 2)
-        self._static_r = np.array([np.hypot(*(o - o.mean(axis=0)).T).max() for o in self.static])
-
     def v2v_params(self) -> V2VParams:
         return V2VParams(self.p.delay_s, self.p.pos_noise_m, self.p.vel_noise_mps, 0.0, 0.1, 0.0)
 
@@ -190,53 +189,8 @@ class FormationController:
     def tables(self) -> dict:
         return {}
 
-    def _obstacles(self, obs: Observation, lead_row, member_pos):
-        """(polys (O,K,2), mask (E,O) which ego's field feels which, leader's (O,) bool, static (O,) bool,
-        velocities (O,2), shield mask (E,O)). The leader's list is shared with every member (V2V); radar
-        returns of a follower only with itself; truth: what only the followers sense (beyond the
-        leader's range; arena) goes to the shield alone."""
-        snap, E = obs.snapshot, len(obs.ego_ids)
-        parts, owner, vel = [], [], []  # owner -1: the leader's list (everyone)
-        if obs.detections is None:  # around every member (a follower 40 m behind must know what it passes)
-            where, r = snap.pos[obs.ego_rows], self.p.sense_radius_m
-            lead = snap.pos[lead_row] if lead_row is not None and self.road is None else None
-            if len(self.static):
-                near = (np.hypot(*(self._static_c[:, None] - where[None]).transpose(2, 0, 1)).min(axis=1)
-                        - self._static_r <= r)
-                parts.append(self._static_polys[near])
-                seen = np.hypot(*(self._static_c[near] - lead).T) - self._static_r[near] <= r if lead is not None \
-                    else np.ones(int(near.sum()), bool)
-                owner += np.where(seen, -1, -3).tolist()
-                vel.append(np.full((int(near.sum()), 2), np.nan))  # NaN: a static obstacle
-            members = set(self.order)
-            o = np.array([k for k, v in enumerate(snap.ids) if v not in members], int)
-            if len(o):
-                o = o[np.hypot(*(snap.pos[o][:, None] - where[None]).transpose(2, 0, 1)).min(axis=1) <= r]
-                ahead = self.p.predict_s * snap.vel[o]  # each as the box it sweeps within predict_s
-                parts.append(footprint_corners(snap.pos[o] + 0.5 * ahead, snap.heading[o],
-                                               snap.length[o] + np.hypot(*ahead.T), snap.width[o]))
-                owner += np.where(np.hypot(*(snap.pos[o] - lead).T) <= r, -1, -3).tolist() if lead is not None \
-                    else [-1] * len(o)
-                vel.append(snap.vel[o] * (self.p.predict_s <= 0))  # a swept box stands still
-        else:
-            corners, rv, who = radar_obstacles(obs, member_pos, self.p.v2v_gate_m)
-            lead_k = obs.ego_ids.index(snap.ids[lead_row]) if lead_row is not None else -2
-            parts.append(corners)
-            vel.append(rv)
-            owner += [-1 if w == lead_k else int(w) for w in who]
-        parts = [x for x in parts if len(x)]
-        if not parts:
-            e = np.zeros((E, 0), bool)
-            return np.zeros((0, 4, 2)), e, np.zeros(0, bool), np.zeros(0, bool), np.zeros((0, 2)), e
-        polys = pad_polygons([pg for part in parts for pg in part])
-        owner = np.asarray(owner)
-        mask = (owner[None, :] == -1) | (owner[None, :] == np.arange(E)[:, None])
-        vel = np.concatenate([x for x in vel if len(x)]).reshape(-1, 2)
-        static = np.isnan(vel[:, 0])
-        return polys, mask, owner == -1, static, np.where(static[:, None], 0.0, vel), mask | (owner[None, :] == -3)
-
     def _repulsion(self, pos, heading, length, width, goal, polys, mask) -> np.ndarray:
-        """Reshaped goal-aware repulsion (E,2) of each ego from the obstacles it feels."""
+        """Goal-aware repulsion (E,2) of each ego from the obstacles it feels, before the reshaping."""
         p, E, O = self.p, len(pos), len(polys)
         if O == 0:
             return np.zeros((E, 2))
@@ -249,8 +203,7 @@ class FormationController:
         rho = np.where(mask.ravel(), np.maximum(rho, p.rho_floor_m), np.inf)
         f1, f2 = ff.repulsion_terms(rho, away, np.repeat(rho_g, O), np.repeat(to_goal, O, axis=0),
                                     p.eta_re, p.rho0_m, p.n_goal)
-        f = (f1 + f2).reshape(E, O, 2).sum(axis=1)
-        return ff.reshape(f, heading, p.alpha, p.beta)
+        return (f1 + f2).reshape(E, O, 2).sum(axis=1)
 
     def _member_repulsion(self, own_pos, nb_pos, heading, length, width) -> np.ndarray:
         """(E,2) push of each member away from the others: footprint-to-footprint distance rho
@@ -274,7 +227,8 @@ class FormationController:
         ego = shield.Members(pos, heading, length, width, nb_pos, nb_vel)
         walls = None if self.road is None else self.road.walls(pos, heading, length, width, self.p.shield_margin_m,
                                                                  self.p.shield_k_ps)
-        return shield.apply(v, ego, *haz, self.p.shield_margin_m, self.p.shield_k_ps, walls, self.p.shield_slide)
+        return shield.apply(v, ego, *haz, self.p.shield_margin_m, self.p.shield_k_ps, walls, self.p.shield_slide,
+                            self.p.shield_members == "disc")
 
     def _mode(self, lead_pos, goal, polys, lead_only, rel_lon, rel_lat, length, width, t) -> None:
         p = self.p
@@ -356,14 +310,20 @@ class FormationController:
         haz = (polys, smask, static, hvel)
         fmask = mask if self.road is None else self.road.field_mask(own_pos, length, width, polys, mask, lk, p.clear_m)
         rep = self._repulsion(own_pos, heading, length, width, goals, polys, fmask)
+        rep_h = ff.reshape(rep, heading, p.alpha, p.beta)  # the leader's (and the followers' once it has left)
         out = np.zeros((len(ids), 2))
         member = self._member_repulsion(own_pos, nb_pos, heading, length, width)
         _, rho_g = unit_norm(goals - own_pos)
-        field = ff.attraction(own_pos, goals, p.eta_at) + rep
+        field = ff.attraction(own_pos, goals, p.eta_at) + rep_h
         cruise = p.leader_speed_mps * np.minimum(1.0, rho_g / p.slow_radius_m)
         field_v = unit_norm(field)[0] * cruise[:, None]
-        if lk is None:  # the leader is done: each follower drives the field to its own goal
-            v = np.array([forward_cone(f, h, np.radians(p.max_turn_deg)) for f, h in zip(field_v, heading)]) + member
+        if lk is None:  # the leader is done: each follower drives the field to its own goal, reshaped in the
+            # frame of the way to it (see the followers' reshaping below; arena seed 35)
+            to_goal = goals - own_pos
+            f = ff.attraction(own_pos, goals, p.eta_at) + ff.reshape(rep, np.arctan2(to_goal[:, 1], to_goal[:, 0]),
+                                                                     p.alpha, p.beta)
+            v = unit_norm(f)[0] * cruise[:, None]
+            v = np.array([forward_cone(f, h, np.radians(p.max_turn_deg)) for f, h in zip(v, heading)]) + member
             v = v * np.minimum(1.0, p.follower_max_speed_mps / np.maximum(np.hypot(*v.T), 1e-9))[:, None]
             return self._shield(v, own_pos, heading, length, width, nb_pos, nb_vel, haz)
         if self.frame is None:
@@ -391,7 +351,11 @@ class FormationController:
         wait = np.clip(1.0 - p.wait_gain_pm * max(e_rms - p.wait_free_m, 0.0), p.wait_min, 1.0)
         out[lk] = forward_cone(field_v[lk] * wait, heading[lk], np.radians(p.max_turn_deg))
         gain = p.k_slot_broken_ps if self.kappa == 3 else p.k_slot_ps
-        v = nb_vel[lk] + gain * err + rep + member
+        # a follower's reshaping frame is the way its slot pulls it, not its heading: a slow member's heading
+        # swings with every command (relaxation actuator), and the beta push with it, which held
+        # followers in pockets between obstacles for good (arena seeds 13, 16, 35, 46)
+        pull = nb_vel[lk] + gain * err
+        v = pull + ff.reshape(rep, np.arctan2(pull[:, 1], pull[:, 0]), p.alpha, p.beta) + member
         v = v * np.minimum(1.0, p.follower_max_speed_mps / np.maximum(np.hypot(*v.T), 1e-9))[:, None]
         out[fol] = v[fol]
         return self._shield(out, own_pos, heading, length, width, nb_pos, nb_vel, haz)

@@ -7,6 +7,9 @@ leader's heading, y to its left, metres, the leader at (0, 0). Nothing here know
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import ConvexHull
+
+from sumo_avoid.core.geometry import convex_distance, pad_polygons
 
 SHAPES = ("triangle", "line", "column", "v", "diamond")
 
@@ -109,6 +112,28 @@ def reshape(f_re: np.ndarray, heading, alpha: float, beta: float) -> np.ndarray:
     q = -s * f_re[:, 0] + c * f_re[:, 1]
     p2, q2 = (1.0 + alpha) * p, q + beta * np.hypot(f_re[:, 0], f_re[:, 1])
     return np.column_stack([c * p2 - s * q2, s * p2 + c * q2])
+
+
+def bridges(polys: np.ndarray, passage_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """Gaps the members cannot pass, closed for the field: for every pair of convex polygons (O, K, 2)
+    less than ``passage_m`` apart, the convex hull of the two. The safety shield keeps a member's
+    disc (its half diagonal r) ``margin`` from every obstacle, so a gap narrower than 2 (r + margin)
+    is shut to it; the field, which measures from the footprint, would still lead a member into it,
+    where the shield holds it for good (arena seeds 46, 48). Returns (hulls (B, H, 2) CCW, padded,
+    pairs (B, 2) the indices i < j they join)."""
+    polys = np.asarray(polys, float)
+    if len(polys) < 2:
+        return np.zeros((0, 3, 2)), np.zeros((0, 2), int)
+    i, j = np.triu_indices(len(polys), 1)
+    d, _, _ = convex_distance(polys[i], polys[j])
+    close = d < passage_m
+    if not close.any():
+        return np.zeros((0, 3, 2)), np.zeros((0, 2), int)
+    hulls = []
+    for a, b in zip(i[close], j[close]):
+        pts = np.vstack([polys[a], polys[b]])
+        hulls.append(pts[ConvexHull(pts).vertices])  # counter-clockwise
+    return pad_polygons(hulls), np.column_stack([i[close], j[close]])
 
 
 # --------------------------------------------------------------------------- width ratio and mode

@@ -19,10 +19,14 @@ Two hazard models (see :func:`disc_hazards`, :func:`footprint_hazards`):
 * **static obstacles**: the vehicle as the disc of its half diagonal about its centre, so no
   heading can put a corner into the obstacle (with the relaxation actuator the heading follows the
   velocity and can swing round at low speed);
-* **vehicles** (other members, non-members): footprint to footprint, relative to the other's
-  velocity; between two members each takes half of the allowed approach against the other's
-  current (V2V) velocity (both run the same shield), so while the velocities follow the commands
-  the pair keeps ``-k h`` together.
+* **vehicles** (non-members): footprint to footprint, relative to the other's velocity;
+* **other members**, relative to the other's current (V2V) velocity, each member taking half of
+  the allowed approach (both run the same shield), so while the velocities follow the commands the
+  pair keeps ``-k h`` together: as discs of their half diagonals (``member_disc``; safe at any
+  headings: with the relaxation actuator two slow members' headings swung round within one 0.2 s
+  step, corners into each other, while their centres stayed 3-4 m apart: 11 contacts in 100 arena
+  runs with footprint gaps) or footprint to footprint (a car's yaw rate is bounded; lane-wide slots
+  on a road need the footprints: 3.5 m between centres is less than two half diagonals).
 """
 from __future__ import annotations
 
@@ -60,6 +64,14 @@ def disc_hazards(pos, radius, polys, centroid):
     return n.reshape(E, O, 2), d.reshape(E, O) - np.repeat(radius, O).reshape(E, O)
 
 
+def member_disc_hazards(pos, radius, nb_pos):
+    """Members against each other as discs: centres pos (E, 2) (own, now), radius (E,) m, nb_pos (E, 2)
+    (the others' V2V positions). Returns (n (E, E, 2) unit vectors from member j's centre towards
+    member i's (0 where they coincide), gap (E, E) m = centre distance - r_i - r_j)."""
+    n, cc = unit_norm(np.asarray(pos, float)[:, None, :] - np.asarray(nb_pos, float)[None, :, :])
+    return n, cc - radius[:, None] - radius[None, :]
+
+
 def footprint_hazards(own, others, own_pos, other_pos):
     """Footprints against footprints: own (E, 4, 2), others (O, 4, 2), centres own_pos (E, 2),
     other_pos (O, 2). Returns (n (E, O, 2) from the other's nearest point towards the ego (centre to
@@ -78,23 +90,33 @@ def barrier(v, n, bound, passes: int = 20, slide: float = 0.0) -> np.ndarray:
 
     Each pass moves every ego's command onto its most violated constraint's line (Motzkin's
     relaxation method: converges to a point of the intersection of the half-planes when it is not
-    empty; in 2-D a few passes suffice); ``passes`` bounds the work. ``slide``: each correction also
-    adds ``slide`` times itself along n turned 90 deg to the left (the hazard's tangent; no change to
-    that constraint), so a command straight into a hazard slides round it instead of stopping dead
-    (a follower whose slot lies behind an obstacle). Returns (E, 2)."""
+    empty; in 2-D a few passes suffice); ``passes`` bounds the work. ``slide``: the command found is
+    then also moved ``slide`` times the correction's size along the first violated constraint's n
+    turned 90 deg to the left (the hazard's tangent; no change to that constraint), so a command
+    straight into a hazard slides round it instead of stopping dead (a follower whose slot lies
+    behind an obstacle), but only where that keeps every constraint (between two hazards sliding
+    along one drives into the other: sliding within the passes took a member wedged between two
+    obstacles to a standstill for good, arena seed 46). Returns (E, 2)."""
     v = np.array(v, float).reshape(-1, 2)
     if n.shape[1] == 0:
         return v
     rows = np.arange(len(v))
+    first = None
+    out = v.copy()
     for _ in range(passes):
-        viol = bound - np.einsum("ecj,ej->ec", n, v)  # > 0: violated by that much
+        viol = bound - np.einsum("ecj,ej->ec", n, out)  # > 0: violated by that much
         c = viol.argmax(axis=1)
         worst = viol[rows, c]
         if not (worst > 1e-9).any():
             break
-        nc = n[rows, c]
-        v += np.where(worst > 1e-9, worst, 0.0)[:, None] * (nc + slide * np.column_stack([-nc[:, 1], nc[:, 0]]))
-    return v
+        first = c if first is None else first
+        out += np.where(worst > 1e-9, worst, 0.0)[:, None] * n[rows, c]
+    if slide == 0.0 or first is None:
+        return out
+    nc = n[rows, first]
+    slid = out + slide * np.hypot(*(out - v).T)[:, None] * np.column_stack([-nc[:, 1], nc[:, 0]])
+    ok = (np.einsum("ecj,ej->ec", n, slid) >= bound - 1e-9).all(axis=1)
+    return np.where(ok[:, None], slid, out)
 
 
 def approach_bounds(n, gap, margin_m: float, k_ps: float, hazard_vel=None, share: float = 1.0):
@@ -127,21 +149,22 @@ def heading_cap(v, heading, n, bound, creep_mps: float = CREEP_MPS) -> np.ndarra
 
 
 def apply(v, m: Members, polys, mask, static, hazard_vel, margin_m: float, k_ps: float, extra=None,
-          slide: float = 0.0) -> np.ndarray:
+          slide: float = 0.0, member_disc: bool = True) -> np.ndarray:
     """The shield on the members' commands v (E, 2): static obstacles (``static`` (O,) of polys
     (O, K, 2)) against each member's disc, other vehicles footprint to footprint relative to their
     velocities (``hazard_vel`` (O, 2)), each hazard only for the members that know it (``mask``
-    (E, O)), and the other members footprint to footprint relative to their V2V velocity, each
-    member taking half of the allowed approach; ``extra``: further (n (E, C, 2), bounds (E, C)), e.g. a
+    (E, O)), and the other members (discs of their half diagonals if ``member_disc``, else footprint to
+    footprint) relative to their V2V velocity, each member taking half of the allowed approach; ``extra``: further (n (E, C, 2), bounds (E, C)), e.g. a
     road's bounds ((n = (0, 1), (0, -1)) in the route frame: the right and the left bound), then
     :func:`heading_cap` on the other constraints (the cap would stop a car that faces the road's edge),
     then the bounds once more, exactly, as limits on d_dot."""
     E = len(v)
     ego = footprint_corners(m.pos, m.heading, m.length, m.width)
+    radius = 0.5 * np.hypot(m.length, m.width)
     ns, bs = [np.zeros((E, 0, 2))], [np.zeros((E, 0))]
     if static.any():
         sp = polys[static]
-        n, gap = disc_hazards(m.pos, 0.5 * np.hypot(m.length, m.width), sp, sp.mean(axis=1))
+        n, gap = disc_hazards(m.pos, radius, sp, sp.mean(axis=1))
         ns.append(n)
         bs.append(np.where(mask[:, static], approach_bounds(n, gap, margin_m, k_ps), -np.inf))
     if (~static).any():
@@ -150,7 +173,8 @@ def apply(v, m: Members, polys, mask, static, hazard_vel, margin_m: float, k_ps:
         ns.append(n)
         bs.append(np.where(mask[:, ~static], approach_bounds(n, gap, margin_m, k_ps, hazard_vel[~static]), -np.inf))
     if E > 1:
-        n, gap = footprint_hazards(ego, footprint_corners(m.nb_pos, m.heading, m.length, m.width), m.pos, m.nb_pos)
+        n, gap = member_disc_hazards(m.pos, radius, m.nb_pos) if member_disc else \
+            footprint_hazards(ego, footprint_corners(m.nb_pos, m.heading, m.length, m.width), m.pos, m.nb_pos)
         ns.append(n)
         bs.append(np.where(np.eye(E, dtype=bool), -np.inf, approach_bounds(n, gap, margin_m, k_ps, m.nb_vel, 0.5)))
     n, b = np.concatenate(ns, axis=1), np.concatenate(bs, axis=1)

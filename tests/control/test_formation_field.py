@@ -109,3 +109,16 @@ def test_forward_cone():
     v = forward_cone(2.0 * np.array([math.cos(2.0944), math.sin(2.0944)]), 0.0, math.radians(75))
     assert v == pytest.approx(2.0 * np.array([math.cos(math.radians(75)), math.sin(math.radians(75))]), abs=1e-9)
     assert forward_cone(np.array([1.0, 0.5]), 0.0, math.radians(75)) == pytest.approx([1.0, 0.5])
+
+
+def test_bridges_close_only_gaps_too_narrow_to_pass():
+    # unit squares at x 0-1 and x 4-5 (3 m apart) and one at y 10-11: with a passage of 3.5 m the first
+    # two are joined by their hull, the rectangle [0, 5] x [0, 1]; at 3.0 m nothing is (3 m passes)
+    a = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    polys = np.stack([a, a + [4.0, 0.0], a + [0.0, 10.0]])
+    hulls, pairs = ff.bridges(polys, 3.5)
+    assert pairs.tolist() == [[0, 1]]
+    assert sorted(map(tuple, hulls[0].tolist())) == [(0.0, 0.0), (0.0, 1.0), (5.0, 0.0), (5.0, 1.0)]
+    assert len(ff.bridges(polys, 3.0)[0]) == 0 and len(ff.bridges(polys[:1], 9.0)[0]) == 0
+    with pytest.raises(ValueError):
+        FormationParams(shield_members="box")

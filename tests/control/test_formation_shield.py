@@ -74,3 +74,35 @@ def test_heading_cap_by_hand():
         np.array([[0.5, 0.0]]))
     assert sh.heading_cap(np.array([[5.0, 0.0]]), np.array([0.0]), n, np.array([[1.0]])) == pytest.approx(
         np.zeros((1, 2)))
+
+
+def test_member_discs_by_hand():
+    # members 5 m apart along x, half diagonals 2 and 1.5: gap 5 - 3.5 = 1.5, normals along -+x; self 5 - 4 = -4
+    # (masked by the caller)
+    pos = np.array([[0.0, 0.0], [5.0, 0.0]])
+    n, gap = sh.member_disc_hazards(pos, np.array([2.0, 1.5]), pos)
+    assert gap[0, 1] == pytest.approx(1.5) and gap[1, 0] == pytest.approx(1.5)
+    assert n[0, 1] == pytest.approx([-1.0, 0.0]) and n[1, 0] == pytest.approx([1.0, 0.0])
+    # two cars side by side 3 m apart at right angles: footprints 1.1 m apart, discs overlap (3 - 2 x 2.19)
+    m = sh.Members(pos=np.array([[0.0, 0.0], [0.0, 3.0]]), heading=np.array([0.0, np.pi / 2]),
+                   length=np.array([4.0, 4.0]), width=np.array([1.8, 1.8]), nb_pos=np.array([[0.0, 0.0], [0.0, 3.0]]),
+                   nb_vel=np.zeros((2, 2)))
+    none = (np.zeros((0, 4, 2)), np.zeros((2, 0), bool), np.zeros(0, bool), np.zeros((0, 2)))
+    # member 0 drives towards member 1 at 1 m/s: footprints 3 - 0.9 - 2 = 0.1 m apart, within the margin:
+    # it must back off at half of 0.5 x (0.3 - 0.1) = 0.05 m/s; discs (gap 3 - 2 r = -1.39 m): at 0.42 m/s
+    v_fp = sh.apply(np.array([[0.0, 1.0], [0.0, 0.0]]), m, *none, 0.3, 0.5, member_disc=False)
+    v_disc = sh.apply(np.array([[0.0, 1.0], [0.0, 0.0]]), m, *none, 0.3, 0.5, member_disc=True)
+    r = 0.5 * np.hypot(4.0, 1.8)
+    assert v_fp[0] == pytest.approx([0.0, -0.25 * (0.3 - 0.1)], abs=1e-9)
+    assert v_disc[0] == pytest.approx([0.0, -0.25 * (2 * r - 3.0 + 0.3)], abs=1e-9)
+
+
+def test_slide_only_where_it_keeps_every_constraint():
+    # one hazard ahead (n = (-1, 0), bound 0): (2, 0) is cut to 0 and slides 2 to the left of n: (0, -2)
+    n1 = np.array([[[-1.0, 0.0]]])
+    assert sh.barrier(np.array([[2.0, 0.0]]), n1, np.zeros((1, 1)), slide=1.0) == pytest.approx(np.array([[0.0, -2.0]]))
+    # a second hazard on that side (n = (0, 1), bound 0): the slide would drive into it, so the plain
+    # correction (0, 0) stands; a command with room, (2, 1) -> (0, 1), keeps it too
+    n2 = np.array([[[-1.0, 0.0], [0.0, 1.0]]])
+    assert sh.barrier(np.array([[2.0, 0.0]]), n2, np.zeros((1, 2)), slide=1.0) == pytest.approx(np.zeros((1, 2)))
+    assert sh.barrier(np.array([[2.0, 1.0]]), n2, np.zeros((1, 2)), slide=1.0) == pytest.approx(np.array([[0.0, 1.0]]))
