@@ -13,7 +13,7 @@ metres is neglected). docs/road_frame.md has the formulas.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable
 
 import numpy as np
@@ -75,8 +75,17 @@ class RoadView:
         self._line_frame = None  # the line's own frame and its arc length at the line's grid, for its curvature
         if len(self.line.s):
             xy = self.frame.to_xy(self.line.s, self.line.d)
-            # curvature smoothed over 1 m, not 5: the line's swing out before a tight turn is a few metres long
-            self._line_frame = (RouteFrame.from_polyline(xy, smooth_m=1.0), self.line.s, arc_lengths(xy))
+            # curvature smoothed over 1 m, not 5: the line's swing out before a tight turn is a few metres
+            # long; counted only along the line's stretches (elsewhere the lane frame's 5 m smoothing
+            # holds: a polyline kink read over 1 m asked a car on a ramp to crawl at 3.6 m/s)
+            arc = arc_lengths(xy)
+            frame = RouteFrame.from_polyline(xy, smooth_m=1.0)
+            g = frame.grid_s0_m + frame.grid_step_m * np.arange(len(frame.kappa_grid))
+            s_g = np.interp(g, arc, self.line.s)
+            on = np.zeros(len(g), bool)
+            for ds in (-2.0, 0.0, 2.0):
+                on |= np.abs(self.line.offset(s_g + ds)) > 1e-9
+            self._line_frame = (replace(frame, kappa_grid=np.where(on, frame.kappa_grid, 0.0)), self.line.s, arc)
         gs, gd = self.frame.to_frenet(np.asarray(task.goal, float)[None, :])
         self.goal = np.array([gs[0], gd[0] - self.line.offset(gs)[0]])
         self._s: float | None = None

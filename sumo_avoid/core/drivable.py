@@ -8,7 +8,8 @@ wide, facing the traffic of the opposite lane (rand04 junction 420: 10 m against
 seed). A driver takes such a turn wide *before* it and cuts in at its apex. This module finds that
 line as a lateral offset d(s) from the route's reference path (the SPEC §5 frame: points
 x_i = P(s_i) + d_i n(s_i) on a grid of spacing h = 0.5 m), by a linear programme over each tight
-stretch (where the path's curvature, smoothed over 1 m, exceeds 1 / (f R_min)):
+stretch (where the path's curvature, smoothed over 3 m, exceeds 1 / (f R_min): a turn, not a kink
+of the lane polyline between two edges; over 1 m a 12 deg kink read as tight):
 
     minimise   W_out sum u_i  +  W_k sum sigma_i  +  sum |d_i| h
     subject to |c_i| <= h_i^2 / (g R_min)                      (the car can drive it: hard)
@@ -167,7 +168,7 @@ def solve_offset(P: np.ndarray, N: np.ndarray, lo: np.ndarray, hi: np.ndarray, k
 
 def drivable_line(frame, corridor, half_width_m: float, turn_radius_m: float, *, margin_m: float = 0.1,
                   max_shift_m: float = 1.5, step_m: float = STEP_M, reach_m: float = REACH_M,
-                  curvature_smooth_m: float = 1.0) -> DrivableLine:
+                  curvature_smooth_m: float = 3.0) -> DrivableLine:
     """The drivable line of a :class:`~sumo_avoid.core.frenet.RouteFrame` for a car of half width
     ``half_width_m`` and smallest turning radius ``turn_radius_m`` (<= 0: no limit, no line);
     ``corridor(s) -> (lo, hi)`` the bounds of its lanes in d, m."""

@@ -14,10 +14,12 @@ conflict point by its own length: with x the distance of its front bumper to the
     t_f = max(x, 0) / max(v, v_floor)          (v_floor = 1 m/s: a foe standing right at the
                                                 conflict point counts as arriving now)
 
-A foe slower than ``START_MPS`` (5 m/s) whose front is within ``AT_LINE_M`` (5 m) of its stop
-line or past it is setting off from the line (a light turned green, a gap opened): it arrives as
-from a standing start, t_f = (sqrt(v^2 + 2 a_f x) - v) / a_f with SUMO's default passenger
-acceleration a_f = 2.6 m/s^2 (not at zipper merges). With x / max(v, 1 m/s) the car standing
+On a signalised foe link, a foe slower than ``START_MPS`` (5 m/s) whose front is within
+``AT_LINE_M`` (5 m) of its stop line or past it is setting off from the line (its light turned
+green): it arrives as from a standing start, t_f = (sqrt(v^2 + 2 a_f x) - v) / a_f with SUMO's
+default passenger acceleration a_f = 2.6 m/s^2. (At unsignalised links the same rule held the ego
+at roundabout entries for ring cars slowing near the entry, and roundabout2 seeds 7 and 8 ran out
+of time; it is not applied there.) With x / max(v, 1 m/s) the car standing
 opposite an ego turning left on a permissive green "arrived" in 5.4 s as the light turned green;
 it set off with the ego and they met in the junction (netgenerate rand06, light 24, seeds 2 and 3).
 
@@ -153,8 +155,8 @@ def foe_arrivals(foes: tuple[FoeLink, ...], signals, lanes: dict[str, list[int]]
                 v = float(speed[r])
                 if allway and order is not None and waits_its_turn(x - foe.line_m, x, v, *order, r):
                     continue
-                # at (or just past) its stop line and slow: it is setting off, not cruising
-                starting = allway or (foe.state != "Z" and x - foe.line_m <= AT_LINE_M and v < START_MPS)
+                # at (or just past) its signal's stop line and slow: it is setting off, not cruising
+                starting = allway or (bool(foe.tls) and x - foe.line_m <= AT_LINE_M and v < START_MPS)
                 out.append((arrival_time(x, v, starting), r, x))
     return out
 

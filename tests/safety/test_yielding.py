@@ -201,13 +201,13 @@ def test_arrival_times_and_standing_runs_by_hand():
 
 
 def test_a_slow_foe_at_its_stop_line_is_setting_off():
-    """Within 5 m of its line (line_m = 10 m before the conflict point) and slower than 5 m/s: a
-    standing start; farther back, or at a zipper merge: constant speed (x / max(v, 1 m/s))."""
+    """On a signalised link, within 5 m of its line (line_m = 10 m before the conflict point) and
+    slower than 5 m/s: a standing start; farther back, or unsignalised: constant speed (x / max(v, 1 m/s))."""
     lanes = {"a_0": [0]}
     def first(state, lane_pos, v):  # noqa: E306
-        foe = FoeLink(state=state, approach=(("a_0", 100.0),), line_m=10.0)
+        foe = FoeLink(tls="" if state == "Z" else "T", link_index=0, state=state, approach=(("a_0", 100.0),), line_m=10.0)
         return foe_arrival((foe,), {}, lanes, np.array([lane_pos]), np.array([v]), np.array([5.0]), set())[0]
     assert first("M", 88.0, 2.0) == pytest.approx((math.sqrt(4.0 + 2 * 2.6 * 12.0) - 2.0) / 2.6)  # 3 m before its line
     assert first("M", 70.0, 2.0) == pytest.approx(15.0)  # 20 m before it: 30 m / 2 m/s
     assert first("M", 88.0, 6.0) == pytest.approx(2.0)  # not slow: 12 m / 6 m/s
-    assert first("Z", 88.0, 2.0) == pytest.approx(6.0)  # zipper: 12 m / 2 m/s
+    assert first("Z", 88.0, 2.0) == pytest.approx(6.0)  # unsignalised (a zipper): 12 m / 2 m/s
