@@ -146,9 +146,14 @@ class RoadView:
             o_hd, o_len, o_wid, o_vel = o_hd[keep], o_len[keep], o_wid[keep], o_vel[keep]
             o_rel = wrap_angle(o_hd - self.frame.heading_at(os_))
             # a vehicle wholly outside the ego's lanes (oncoming traffic beyond the centre line,
-            # a car on a road nearby) is behind a bound the ego keeps to: not an obstacle to it
+            # a car on a road nearby) is behind a bound the ego keeps to: not an obstacle to it; on a
+            # drivable line's stretch the bound is the line's room (a car standing at the end of the
+            # oncoming lane beside a wide exit was left out and hit: rand08 seed 4)
             half = 0.5 * (np.abs(np.sin(o_rel)) * o_len + np.abs(np.cos(o_rel)) * o_wid)
             lo, hi = self.lanes.corridor(os_) if self.lanes is not None else self.corridor(os_)
+            off = self.line.offset(os_)  # where the drivable line swings out, so does the room the car may use
+            line_lo, line_hi = self.corridor(os_)
+            lo, hi = np.minimum(lo, line_lo + off), np.maximum(hi, line_hi + off)
             keep = (od + half > lo - OUTSIDE_MARGIN_M) & (od - half < hi + OUTSIDE_MARGIN_M)
             os_, od, o_rel, o_len, o_wid, o_vel = os_[keep], od[keep], o_rel[keep], o_len[keep], o_wid[keep], o_vel[keep]
             vs, vd = self.frame.velocity_to_frenet(os_, od, o_vel)

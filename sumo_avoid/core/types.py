@@ -40,6 +40,11 @@ class RouteLink:
     state: str = ""  # the connection's static right of way in the net: M major, m minor, = equal, s stop, ...
     direction: str = ""  # s straight, l left, r right, t turn, L/R partly left/right
     foes: tuple[FoeLink, ...] = ()  # links with priority over this one (sumo.right_of_way)
+    # the lane of each edge running opposite to the link's exit edge (into this junction) that borders
+    # it: (SUMO lane id, lane length m, side: +1 left, -1 right, the internal lanes its connections run
+    # over); traffic there meets a car whose turn swings wide at the exit (safety.wide_turns)
+    oncoming: tuple[tuple[str, float, int, tuple[str, ...]], ...] = ()
+    leaving: tuple[str, ...] = ()  # the lane bordering the entry edge on each edge leaving the junction the other way
 
 
 @dataclass(frozen=True)
@@ -68,6 +73,7 @@ class EgoTask:
     speed_limits: np.ndarray | None = None  # (K, 2) [s where a lane piece starts, its speed limit], m, m/s
     lanes: tuple[LanePiece, ...] = ()  # the path's lane pieces, in route order
     width_m: float = 1.8  # the ego's width (SUMO's vehicle type), m
+    length_m: float = 5.0  # ... and length, m
 
 
 @dataclass(frozen=True)

@@ -36,7 +36,7 @@ class EgoBook:
         goal = self._goal_point(vid, list(info.route_edges), path, links)
         if self.uses_goals:
             self.goals[vid] = (float(goal[0]), float(goal[1]))
-        task = EgoTask(vid, goal, path, self.cruise_speed_mps, links, limits, lanes, info.width_m)
+        task = EgoTask(vid, goal, path, self.cruise_speed_mps, links, limits, lanes, info.width_m, info.length_m)
         self.active[vid] = task
         self.tasks[vid] = task
         if self.follow_routes:

@@ -18,6 +18,9 @@ Per ego and step, with s the arc length of the ego's front bumper projected on i
   that could stop before the line only braking harder than ``commit_decel_mps2`` goes on, and
   past the line it never stops for a foe (it clears the junction). A zipper merge is taken in
   turn (yielding.zipper_slot).
+* **Wide exits.** Where a turn is too tight for the car and its drivable line swings into the
+  oncoming lane of the exit edge, the ego is held at its stop line until that lane is clear for
+  the time it takes to make the turn (:mod:`sumo_avoid.safety.wide_turns`), on any link.
 * **Stop signs.** At a link whose state is 's' (stop) or 'w' (all-way stop) the ego is held by
   the braking curve until it has stood (slower than ``stop_speed_mps``) with its front within
   ``stop_zone_m`` of its stop position; then it only gives way as above.
@@ -48,6 +51,7 @@ import numpy as np
 from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.polyline import polyline_track
 from sumo_avoid.core.types import EgoTask, Keys
+from sumo_avoid.safety.wide_turns import oncoming_first, wide_exits
 from sumo_avoid.safety.yielding import (
     STAND_MPS,
     can_give_way,
@@ -99,6 +103,7 @@ class _Ego:
     seen: bool = False
     yellow: dict = field(default_factory=dict)  # link position in task.links -> STOP | GO at the yellow's onset
     stopped: dict = field(default_factory=dict)  # link position of a stop sign where the ego has stood -> since when, s
+    wide: dict = field(default_factory=dict)  # link position -> its wide exit into oncoming traffic (wide_turns)
 
 
 def signal_char(signals, link) -> str:
@@ -135,10 +140,13 @@ class TrafficRulesLayer:
         self._yields: set[tuple[str, float]] = set()  # (ego, stop line s) where the ego gave way
         self._allway = False  # an ego's route crosses an all-way stop: follow who stands since when
         self._stand: dict[str, tuple] = {}  # vehicle id -> (start, end (nan: still)) of its last standing run, s
+        self._turn_radius_m = float(getattr(ctx, "turn_radius_m", 0.0) or 0.0)  # 0: no drivable line, no wide exits
 
     def add_ego(self, task: EgoTask) -> None:
-        watch = any(lk.tls or lk.foes or lk.state in STOP_SIGNS for lk in task.links) or self.p.speed_factor is not None
-        self._egos[task.vid] = _Ego(task, watch)
+        wide = wide_exits(task, self._turn_radius_m)
+        watch = (any(lk.tls or lk.foes or lk.state in STOP_SIGNS for lk in task.links) or bool(wide)
+                 or self.p.speed_factor is not None)
+        self._egos[task.vid] = _Ego(task, watch, wide=wide)
         self._allway |= any(lk.state == "w" and lk.foes for lk in task.links)
 
     def _track_standing(self, obs) -> None:
@@ -191,6 +199,10 @@ class TrafficRulesLayer:
                     e.stopped[k] = snap.time_s  # stood at the sign: from now on it only gives way
                 elif not late:
                     return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
+            wide = e.wide.get(k)
+            if (wide is not None and not late and
+                    oncoming_first(wide, e.s_m, lanes, snap.lane_pos, snap.speed) < p.gap_margin_s):
+                return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
             if not link.foes:
                 continue
             if not yields(link, snap.signals) or late:

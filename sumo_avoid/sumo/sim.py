@@ -49,6 +49,7 @@ class EgoInfo:
     route_edges: tuple[str, ...]
     lane_index: int
     width_m: float = 1.8
+    length_m: float = 5.0
 
 
 def sumo_args(net: pathlib.Path, routes, additional, step_s: float, seed: int, lateral_resolution_m: float,
@@ -181,7 +182,8 @@ class SumoSim:
         self._egos.add(vid)
         self._static_key = None
         self._routes[vid] = tuple(libsumo.vehicle.getRoute(vid))
-        return EgoInfo(vid, self._routes[vid], libsumo.vehicle.getLaneIndex(vid), libsumo.vehicle.getWidth(vid))
+        return EgoInfo(vid, self._routes[vid], libsumo.vehicle.getLaneIndex(vid), libsumo.vehicle.getWidth(vid),
+                       libsumo.vehicle.getLength(vid))
 
     def follow_route(self, task: EgoTask) -> None:
         """Keep ego ``task.vid`` on its route in SUMO's view while it drives on it (:mod:`.placement`)."""

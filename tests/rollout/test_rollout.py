@@ -102,7 +102,7 @@ class FakeSim:
         return []
 
     def take_over(self, vid):
-        return type("Info", (), {"route_edges": ("r",), "lane_index": 0, "width_m": 1.8})()
+        return type("Info", (), {"route_edges": ("r",), "lane_index": 0, "width_m": 1.8, "length_m": 5.0})()
 
     def follow_route(self, task):
         pass

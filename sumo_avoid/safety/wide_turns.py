@@ -1,0 +1,119 @@
+"""Turns a car cannot make inside its lane, and the oncoming traffic they meet (SPEC §5, rules layer).
+
+Where a junction's turn is tighter than the car's turning circle, the car drives the drivable line
+(:mod:`sumo_avoid.core.drivable`): wide before the turn, across the apex, and wide again at the
+exit, where it may come within a few decimetres of the centre line, or past it. A car following that
+line strays from it by up to ``TRACK_ERROR_M`` at the exit (rand08, 130 deg right turn at a 4.25 m
+turning radius: 0.49 m), and its corner then sweeps the lane of the oncoming traffic. A driver of a
+long vehicle waits at the line until that lane is clear; so does the ego.
+
+For a link whose exit edge has an oncoming lane beside it (``RouteLink.oncoming``), the *wide exit*
+is the stretch from 2 m before the exit edge to ``REACH_M`` past it where the line, widened by the
+car's half width and ``TRACK_ERROR_M``, crosses the bound of the ego's lanes on that lane's side.
+The line is the path of the car's centre: with s_w the last point of the stretch, the car's front
+corner reaches s_w + L/2 (L its length), so the conflict point on the oncoming lane lies
+e = s_w + L/2 - s_exit before that lane's end (its stop line), and the ego has cleared the wide exit
+when its front is at s_clear = s_w + L. An oncoming vehicle x metres before the conflict point at
+speed v arrives in max(x, 0) / max(v, 1 m/s) (:func:`~sumo_avoid.safety.yielding.arrival_time`;
+past that point it is in the ego's sweep until it has left its lane: rand08 seed 4, a car braking
+to the end of that lane was hit when counted only until its rear had passed the point). A car that
+*stands* past the point waits for the junction, SUMO's right of way often for the ego itself: waiting
+for it deadlocked both (rand08 seed 4, 90 s); it is not waited for, and the ego's road view keeps it
+an obstacle to steer clear of (control/road_view.py: a vehicle within the room of the drivable line
+is in the scene). The ego,
+its front at s, clears in (s_clear - s) / ``TURN_CRAWL_MPS``, the speed it makes such turns at
+(rand08: it crosses the line at 3.2 m/s and slows to 2.1 m/s at the apex; it took 6 s from the line
+to s_w, 14 m). Before its stop line the ego is held while an oncoming vehicle arrives before it has
+cleared, plus the rules' gap margin (rules.py), and while a car from the oncoming lane is still in
+the junction (on the internal lanes its connections run over): it turns or passes next to the ego's
+wide entry (tests/data/tight_turn at 130 deg: released as the oncoming car's rear had passed the
+conflict point, the ego met it turning left in the junction, gap 0.10 m), or has left it by less
+than ``LEAVING_CLEAR_M`` on the lane beside the ego's entry (released as that car left the
+junction, the ego's wide entry closed on it to 0.04 m).
+
+The wide *entry* before the stop line keeps to the ego's lane (the line's lane bounds); a car that
+passes it on the opposite lane is not waited for.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sumo_avoid.core.drivable import REACH_M, drivable_line
+from sumo_avoid.core.frenet import RouteFrame
+from sumo_avoid.core.lanes import RouteLanes
+from sumo_avoid.core.types import EgoTask
+from sumo_avoid.safety.yielding import STAND_MPS, arrival_time
+
+#: A car may stray this far from its drivable line in a tight turn (rand08: 0.49 m), m.
+TRACK_ERROR_M = 0.5
+#: A car makes a turn too tight for it at about this speed (rand08: 2.1-3.2 m/s, 2.3 m/s on average), m/s.
+TURN_CRAWL_MPS = 2.0
+#: The wide exit is looked for from this far before the exit edge, m.
+BEFORE_EXIT_M = 2.0
+STEP_M = 0.25
+#: A car leaving the junction beside the ego's entry is in the way of its wide entry until this far out, m.
+LEAVING_CLEAR_M = 12.0
+
+
+@dataclass(frozen=True)
+class WideExit:
+    """Where a turn's drivable line sweeps into the oncoming lane of its exit edge."""
+
+    s_clear_m: float  # arc length on the ego's path where its front is when the sweep has ended, m
+    conflicts: tuple[tuple[str, float], ...]  # (oncoming lane id, offset of the conflict point on it), m
+    inside: tuple[str, ...] = ()  # the junction's internal lanes the oncoming lanes lead over
+    leaving: tuple[str, ...] = ()  # the lanes leaving the junction beside the ego's entry
+
+
+def wide_exits(task: EgoTask, turn_radius_m: float) -> dict[int, WideExit]:
+    """The wide exits of an ego's route, by position of the link in ``task.links`` (module docstring)."""
+    if turn_radius_m <= 0.0 or not task.lanes or not any(lk.oncoming for lk in task.links):
+        return {}
+    frame = RouteFrame.from_polyline(task.path)
+    lanes = RouteLanes(task.lanes)
+    line = drivable_line(frame, lanes.corridor, 0.5 * task.width_m, turn_radius_m)
+    if not len(line.s):
+        return {}
+    reach = 0.5 * task.width_m + TRACK_ERROR_M
+    out = {}
+    for k, link in enumerate(task.links):
+        s_exit = next((p.s_start_m for p in task.lanes
+                       if p.s_start_m >= link.s_stop_m and not p.edge.startswith(":")), None)
+        if not link.oncoming or s_exit is None:
+            continue
+        s = np.arange(s_exit - BEFORE_EXIT_M, s_exit + REACH_M, STEP_M)
+        off = line.offset(s)
+        lo, hi = lanes.corridor(s)
+        bent = np.abs(off) > 1e-9
+        conflicts, ends, inside = [], [], []
+        for lane, length, side, via in link.oncoming:
+            over = bent & ((off + reach > hi) if side > 0 else (off - reach < lo))
+            if over.any():
+                end = float(s[np.flatnonzero(over)[-1]]) + STEP_M
+                ends.append(end)
+                conflicts.append((lane, length - max(end + 0.5 * task.length_m - s_exit, 0.0)))
+                inside += via
+        if conflicts:
+            out[k] = WideExit(max(ends) + task.length_m, tuple(conflicts), tuple(inside), link.leaving)
+    return out
+
+
+def oncoming_first(wide: WideExit, s_front_m: float, lanes: dict[str, list[int]],
+                   lane_pos, speed) -> float:
+    """(earliest arrival of an oncoming vehicle at the wide exit) - (when the ego has cleared it), s:
+    the ego must wait while this is below the gap margin. +inf when no vehicle comes."""
+    t_clear = max(wide.s_clear_m - s_front_m, 0.0) / TURN_CRAWL_MPS
+    if any(lanes.get(lane) for lane in wide.inside) or any(
+            float(lane_pos[r]) < LEAVING_CLEAR_M for lane in wide.leaving for r in lanes.get(lane, ())):
+        return -np.inf  # a car still crossing the junction or just out of it beside the ego's wide entry
+    first = np.inf
+    for lane, offset in wide.conflicts:
+        for r in lanes.get(lane, ()):
+            # past the conflict point it is in the ego's sweep until it has left its lane (then ``inside``),
+            # unless it stands there: it waits for the junction, likely for the ego (RoadView keeps it an obstacle)
+            x, v = offset - float(lane_pos[r]), float(speed[r])
+            if x > 0.0 or v >= STAND_MPS:
+                first = min(first, arrival_time(x, v))
+    return first - t_clear
