@@ -128,7 +128,8 @@ def run(args) -> int:
     led = args.out / "ledger.sqlite"
     ledger_mod.check(led, "--out")  # a folder that holds (or can hold) the study's ledger
     every = tuple(s for v in runs.values() for s in v)
-    cfg = batch.BatchConfig(every, led, workers=args.workers or os.cpu_count() or 1, scheduler=args.scheduler)
+    cfg = batch.BatchConfig(every, led, workers=args.workers or os.cpu_count() or 1, scheduler=args.scheduler,
+                            retry_failed=bool(getattr(args, "retry_failed", False)))
     c = batch.run_batch(cfg)
     print(f"reproduce formation: {c['done']} done, {c['failed']} failed, {c['skipped']} already recorded -> {led}")
     df = ledger_mod.read(led).set_index("key")

@@ -193,6 +193,8 @@ def add_parser(sub) -> None:
                                                                                  "(default the three goals)")
     f.add_argument("--workers", type=int, default=None, help="formation: parallel runs (default: CPU count)")
     f.add_argument("--scheduler", default=None, metavar="ADDRESS", help="formation: run on a Dask cluster")
+    f.add_argument("--retry-failed", action="store_true", help="formation: re-run runs the ledger has as failed "
+                                                               "(e.g. a worker killed from outside)")
     r.set_defaults(func=_cmd)
 
 

@@ -27,3 +27,20 @@ def test_scenario_error_survives_pickling():
     assert type(back) is ScenarioError and str(back) == str(e) == "a.toml: key 'sim.step_s': expected a number, got 'x'"
     quiet = pickle.loads(pickle.dumps(ScenarioError("a.toml", "sim", "files SUMO can load", show_got=False)))
     assert str(quiet) == "a.toml: key 'sim': expected files SUMO can load"
+
+
+@pytest.mark.parametrize("flag", [False, True])
+def test_reproduce_formation_passes_retry_failed_to_its_batch(tmp_path, monkeypatch, flag):
+    from sumo_avoid.studies import batch
+
+    seen = []
+
+    def stop(cfg):
+        seen.append(cfg)
+        raise KeyboardInterrupt  # stop before anything runs
+
+    monkeypatch.setattr(batch, "run_batch", stop)
+    code = main(["reproduce", "formation", "--runs", "1", "--workers", "1", "--out", str(tmp_path / "f"),
+                 *(["--retry-failed"] if flag else [])])
+    assert code != 0  # interrupted (the CLI turns Ctrl-C into one line and a non-zero exit)
+    assert len(seen) == 1 and seen[0].retry_failed is flag and len(seen[0].runs) > 0
