@@ -22,7 +22,7 @@ class ActuatorConfig:
     relax_max_accel_mps2: float = field_doc(6.0, doc="relaxation mode: acceleration cap, m/s^2")
     outer_noise_m2ps3: float = field_doc(0.0, doc="relaxation mode: reference simulator's 'outer' noise on the "
                                                   "actual motion, sigma in m^2/s^3 (robotsim: 0.2; 0 = off; "
-                                                  "sumo_avoid/noise.py)")
+                                                  "sumo_avoid/core/noise.py)")
 
     def __post_init__(self):
         if self.mode not in ("kinematic", "relaxation"):

@@ -52,7 +52,7 @@ class FlockingParams:
     vel_noise_mps: float = field_doc(0.0, doc="std of Gaussian noise on sensed velocities, m/s")
     gps_sigma_m2ps2: float = field_doc(0.0, doc="reference simulator's GPS error (damped random walk per vehicle on "
                                                 "sensed own and neighbour states), sigma m^2/s^2 (robotsim: 0.005; "
-                                                "0 = off; sumo_avoid/noise.py)")
+                                                "0 = off; sumo_avoid/core/noise.py)")
     gps_lambda_ps: float = field_doc(0.1, doc="GPS error damping lambda, 1/s")
     shill_normal_only: bool = field_doc(False, doc="road adaptation (not SPEC): the shill term sees only the velocity "
                                                    "difference along the wall/obstacle normal (default off = eq. 8)")
