@@ -40,6 +40,7 @@ import numpy as np
 
 from sumo_avoid.control import formation_field as ff
 from sumo_avoid.control import formation_shield as shield
+from sumo_avoid.control.formation_lanes import LaneFormation
 from sumo_avoid.control.formation_road import RoadFrame
 from sumo_avoid.control.formation_sense import ObstacleLists
 from sumo_avoid.core.config import FieldError, field_doc
@@ -90,6 +91,12 @@ class FormationParams:
     safe_gap_m: float = field_doc(2.0, doc="gamma_min: sideways gap neighbours keep, m")
     relax_s: float = field_doc(2.0, doc="a lower kappa is taken only after it held this long, s")
     widen_rate_ps: float = field_doc(0.1, positive=True, doc="the lateral scale grows at most this fast, 1/s")
+    road: str = field_doc("lanes", doc="on a road: 'lanes' (slots held in whole lanes, each member driving the apf "
+                                       "road field in its lane: control/formation_lanes.py) or 'field' (the arena's "
+                                       "field and shield in the leader's route frame: control/formation_road.py)")
+    block_speed_frac: float = field_doc(0.5, doc="road 'lanes': a vehicle slower than this fraction of leader_speed_mps "
+                                                  "blocks its lane for the formation, 1")
+    goal_lane_m: float = field_doc(150.0, doc="road 'lanes': this near its goal the formation moves to the goal's lane, m")
     broken: str = field_doc("slots", doc="kappa 3: 'slots' (weak pull to the nominal slots, each avoids on its "
                                          "own) or 'trail' (each follows the leader's path)")
     behind: float = field_doc(1.0, doc="W_max also counts obstacles beside the formation's rows: this fraction "
@@ -115,6 +122,8 @@ class FormationParams:
     def __post_init__(self):
         if self.shield_members not in ("disc", "footprint"):
             raise FieldError("shield_members", "'disc' or 'footprint'", self.shield_members)
+        if self.road not in ("lanes", "field"):
+            raise FieldError("road", "'lanes' or 'field'", self.road)
         if self.broken not in ("slots", "trail"):
             raise FieldError("broken", "'slots' or 'trail'", self.broken)
         if self.shape not in ff.SHAPES:
@@ -160,6 +169,7 @@ class FormationController(ObstacleLists):
         self._set_static(tuple(ctx.obstacles))
         # on a road (no [arena]) the formation drives in the leader's route frame (formation_road.py)
         self._on_road, self.road = getattr(ctx, "road", None) is not None and getattr(ctx, "walls", None) is None, None
+        self.lanes = LaneFormation(params, ctx) if self._on_road and params.road == "lanes" else None
         self.order: list[str] = []
         self.offsets = np.zeros((0, 2))
         self.frame: float | None = None
@@ -175,12 +185,16 @@ class FormationController(ObstacleLists):
 
     def add_ego(self, task: EgoTask) -> None:
         self.tasks[task.vid] = task
+        if self.lanes is not None:
+            self.lanes.add_ego(task)
         if not self.order or task.vid not in self.order:
             self.order = member_order(self.p, set(self.tasks) | set(self.order))
             self.offsets = ff.slots(self.p.shape, len(self.order), self.p.spacing_m, self.p.apex_deg)
 
     def remove_ego(self, vid: str) -> None:
         self.tasks.pop(vid, None)
+        if self.lanes is not None:
+            self.lanes.remove_ego(vid)
 
     def stats(self) -> dict:
         return {"formation_kappa_steps": list(self.kappa_steps), "formation_mode_log": self.log,
@@ -250,7 +264,14 @@ class FormationController(ObstacleLists):
         gamma = W_max / W
         s_min = ff.min_lateral_scale(self.offsets, length, width, p.safe_gap_m)
         g_min = ff.gamma_min(s_min, span, width, p.clear_m, W)
-        want = ff.mode(gamma, g_min)
+        self._switch(ff.mode(gamma, g_min), t, gap_centre=0.5 * (gap_lo + gap_hi), gamma=gamma, W=W,
+                     W_now=ff.formation_width(rel_lat, width), W_max=W_max, gamma_min=g_min)
+        target = ff.lateral_scale(W_max, span, width, p.clear_m) if self.kappa == 2 else 1.0
+        self.scale = min(target, self.scale + p.widen_rate_ps * self.step_s) if target > self.scale else target
+
+    def _switch(self, want: int, t: float, **last) -> int:
+        """Mode kappa with hysteresis (a higher one at once, a lower one after ``relax_s``), counted and
+        logged; ``last`` (gamma, W, W_max, gamma_min, ...) kept for tests and plots."""
         if want >= self.kappa:
             self._lower_since = None
             if want > self.kappa:
@@ -258,15 +279,13 @@ class FormationController(ObstacleLists):
                 self.log.append([float(t), want])
         else:
             self._lower_since = t if self._lower_since is None else self._lower_since
-            if t - self._lower_since >= p.relax_s - 1e-9:
+            if t - self._lower_since >= self.p.relax_s - 1e-9:
                 self.kappa, self._lower_since = want, None
                 self.log.append([float(t), want])
-        target = ff.lateral_scale(W_max, span, width, p.clear_m) if self.kappa == 2 else 1.0
-        self.scale = min(target, self.scale + p.widen_rate_ps * self.step_s) if target > self.scale else target
         self.kappa_steps[self.kappa - 1] += 1
-        self.gamma_min_seen = min(self.gamma_min_seen, gamma)
-        self.last = {"gap_centre": 0.5 * (gap_lo + gap_hi), "gamma": gamma, "W": W, "W_now": ff.formation_width(rel_lat, width), "W_max": W_max,
-                     "gamma_min": g_min, "kappa": self.kappa}
+        self.gamma_min_seen = min(self.gamma_min_seen, last["gamma"])
+        self.last = {**last, "kappa": self.kappa}
+        return self.kappa
 
     def _extend_trail(self, pos) -> None:
         if not len(self.trail):
@@ -286,6 +305,11 @@ class FormationController(ObstacleLists):
     def act(self, obs: Observation) -> np.ndarray:
         ids, goals = obs.ego_ids, np.array([self.tasks[v].goal for v in obs.ego_ids], float).reshape(-1, 2)
         leader = self.order[0] if self.order else None
+        if self.lanes is not None:
+            _, _, nb_pos, nb_vel = obs.v2v.states(obs.snapshot, obs.ego_rows)
+            t = obs.snapshot.time_s
+            return self.lanes.act(obs, self.order, self.offsets, leader if leader in ids else None, nb_pos,
+                                  np.hypot(*nb_vel.T), lambda want, **last: self._switch(want, t, **last))
         if not self._on_road or (self.road is None and leader not in ids):
             return self._act(obs, goals)
         if self.road is None:

@@ -8,6 +8,9 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+#: Paths this many times longer than wide are a road: drawn with the lateral scale stretched.
+STRIP = 8.0
+
 
 def kappa_steps(log, t_end: float) -> tuple[np.ndarray, np.ndarray]:
     """The step function of kappa from its change log [[t, kappa], ...] (kappa 1 before the first
@@ -18,12 +21,19 @@ def kappa_steps(log, t_end: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def plot_formation(res, m: dict, out_png: pathlib.Path, title: str = "") -> None:
-    fig = Figure(figsize=(12, 5.5))
+    t = res.traj[res.traj["is_ego"]].sort_values(["id", "step"])
+    dx, dy = float(np.ptp(t["x"])) if len(t) else 1.0, float(np.ptp(t["y"])) if len(t) else 1.0
+    strip = dx > STRIP * max(dy, 1.0)  # a road: the panels one above the other, the lateral scale stretched
+    fig = Figure(figsize=(14, 7.5) if strip else (12, 5.5))
     FigureCanvasAgg(fig)
-    ax, axk = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.3, 1.0]})
+    ax, axk = fig.subplots(2, 1) if strip else fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.3, 1.0]})
     for ob in res.scene.obstacles:
         ax.fill(ob[:, 0], ob[:, 1], color="0.35")
-    t = res.traj[res.traj["is_ego"]].sort_values(["id", "step"])
+    others = res.traj[~res.traj["is_ego"]]
+    if len(others):  # vehicles standing the whole run (a lane closure, parked cars), as grey boxes
+        g = others.groupby("id")[["x", "y", "speed"]].agg({"x": "mean", "y": "mean", "speed": "max"})
+        g = g[g["speed"] < 0.1]
+        ax.plot(g["x"], g["y"], "s", color="0.4", ms=4, label="standing")
     for vid, g in t.groupby("id", sort=True):  # one line per member (plotting only)
         ax.plot(g["x"], g["y"], lw=1.2 if vid == min(t["id"]) else 0.7, label=vid)
     for step in (t["step"].min(), t["step"].max()):
@@ -31,10 +41,14 @@ def plot_formation(res, m: dict, out_png: pathlib.Path, title: str = "") -> None
         ax.plot(s["x"], s["y"], "k.", ms=4)
     for g in res.goals.values():
         ax.plot(*g, "rx", ms=5)
-    ax.set_aspect("equal")
+    exaggeration = max(1, int(dx / max(dy, 1.0) / STRIP)) if strip else 1
+    ax.set_aspect(float(exaggeration))
     ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.legend(fontsize=7, loc="lower right")
+    ax.set_ylabel("y (m)" if exaggeration == 1 else f"y (m, vertical x{exaggeration})")
+    if strip:
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    else:
+        ax.legend(fontsize=7, loc="lower right")
     tk, kk = kappa_steps(m.get("formation_mode_log") or [], res.sim_time_s)
     axk.step(tk, kk, where="post", color="C3")
     axk.set_yticks([1, 2, 3], ["1 keep", "2 narrow", "3 break up"])
