@@ -34,6 +34,7 @@ and what each member's shield also sees, in docs/formation.md.
 from __future__ import annotations
 
 import re
+from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
@@ -97,6 +98,9 @@ class FormationParams:
     block_speed_frac: float = field_doc(0.5, doc="road 'lanes': a vehicle slower than this fraction of leader_speed_mps "
                                                   "blocks its lane for the formation, 1")
     goal_lane_m: float = field_doc(150.0, doc="road 'lanes': this near its goal the formation moves to the goal's lane, m")
+    lost_window_s: float = field_doc(10.0, positive=True, doc="once the leader is at its goal, a follower that came less "
+                                                             "than lost_progress_m nearer its own in this time ...")
+    lost_progress_m: float = field_doc(1.0, doc="... follows the leader's path (a carrot spacing_m ahead on it) to its end, m")
     broken: str = field_doc("slots", doc="kappa 3: 'slots' (weak pull to the nominal slots, each avoids on its "
                                          "own) or 'trail' (each follows the leader's path)")
     behind: float = field_doc(1.0, doc="W_max also counts obstacles beside the formation's rows: this fraction "
@@ -178,6 +182,9 @@ class FormationController(ObstacleLists):
         self.log: list[list[float]] = []  # [time_s, kappa] at every change
         self.trail = np.zeros((0, 3))  # the leader's path: x, y, arc length s (a point every 0.5 m)
         self.gamma_min_seen = np.inf
+        self._progress: dict[str, deque] = {}  # follower -> (time, distance to its goal) once the leader is done
+        self._lost: dict[str, float | None] = {}  # follower -> how far it came along the leader's path (_lost_goals)
+        # while it follows that path; None once it reached the path's end
         self.last = {}  # the last step's gamma, W, W_max, gamma_min (tests, plots)
 
     def v2v_params(self) -> V2VParams:
@@ -302,6 +309,31 @@ class FormationController(ObstacleLists):
         return np.column_stack([np.interp(s, self.trail[:, 2], self.trail[:, 0]),
                                 np.interp(s, self.trail[:, 2], self.trail[:, 1])])
 
+    def _lost_goals(self, ids, pos, goals, t: float) -> np.ndarray:
+        """Goals (E, 2) once the leader is at its goal: a follower that came less than ``lost_progress_m``
+        nearer its own goal within ``lost_window_s`` is caught in a pocket of the field (arena seed 35:
+        circling in front of two obstacles until the end) and from then on aims at the point
+        ``spacing_m`` ahead on the leader's path (a way the leader drove) past the path's point nearest
+        it (never behind where it was on the path), until that point would lie beyond the path's end;
+        then at its goal again, for good."""
+        p, out = self.p, np.array(goals, float)
+        dist = np.hypot(*(out - pos).T)
+        for k, vid in enumerate(ids):
+            h = self._progress.setdefault(vid, deque())
+            h.append((t, float(dist[k])))
+            while h[0][0] < t - p.lost_window_s - 1e-9:
+                h.popleft()
+            if vid not in self._lost and h[-1][0] - h[0][0] >= p.lost_window_s - 1e-9 and h[0][1] - h[-1][1] < p.lost_progress_m:
+                self._lost[vid] = 0.0
+            if self._lost.get(vid) is not None:  # along the path, never back (its nearest point jumps)
+                s = max(self._lost[vid], float(self.trail[int(np.argmin(np.hypot(*(self.trail[:, :2] - pos[k]).T))), 2]))
+                if s + p.spacing_m < self.trail[-1, 2]:
+                    self._lost[vid] = s
+                    out[k] = self._trail_points([self.trail[-1, 2] - s - p.spacing_m])[0]
+                else:  # at the path's end: to its goal, for good (aiming back at the path made it circle)
+                    self._lost[vid] = None
+        return out
+
     def act(self, obs: Observation) -> np.ndarray:
         ids, goals = obs.ego_ids, np.array([self.tasks[v].goal for v in obs.ego_ids], float).reshape(-1, 2)
         leader = self.order[0] if self.order else None
@@ -330,6 +362,8 @@ class FormationController(ObstacleLists):
         heading, length, width = snap.heading[rows], snap.length[rows], snap.width[rows]
         leader = self.order[0] if self.order else None
         lk = ids.index(leader) if leader in ids else None
+        if lk is None and len(self.trail) > 1:
+            goals = self._lost_goals(ids, own_pos, goals, snap.time_s)
         polys, mask, lead_only, static, hvel, smask = self._obstacles(obs, rows[lk] if lk is not None else None, nb_pos)
         haz = (polys, smask, static, hvel)
         fmask = mask if self.road is None else self.road.field_mask(own_pos, length, width, polys, mask, lk, p.clear_m)

@@ -3,6 +3,7 @@ gamma_min and kappa, each against values computed by hand."""
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -122,3 +123,25 @@ def test_bridges_close_only_gaps_too_narrow_to_pass():
     assert len(ff.bridges(polys, 3.0)[0]) == 0 and len(ff.bridges(polys[:1], 9.0)[0]) == 0
     with pytest.raises(ValueError):
         FormationParams(shield_members="box")
+
+
+def test_lost_follower_follows_the_leaders_path_then_its_goal():
+    """Once the leader is done, a follower that made < 1 m towards its goal in 10 s aims at the point
+    spacing_m (8 m) ahead on the leader's path past its nearest point, never going back along it, and
+    at its own goal for good once that point would lie beyond the path's end (by hand: a path along
+    the x axis from 0 to 100 m)."""
+    c = FormationController(FormationParams(), SimpleNamespace(step_s=0.1, obstacles=(), road=None, walls=None))
+    x = np.arange(0.0, 100.01, 0.5)
+    c.trail = np.column_stack([x, np.zeros_like(x), x])
+    goal = np.array([[0.0, 50.0]])
+    at = np.array([[50.0, 5.0]])
+    for k in range(100):  # 9.9 s without progress: still its goal
+        assert c._lost_goals(["f1"], at, goal, 0.1 * k).tolist() == goal.tolist()
+    # at 10 s: lost -> the path's point 50 + 8 = 58 m
+    assert c._lost_goals(["f1"], at, goal, 10.0) == pytest.approx(np.array([[58.0, 0.0]]))
+    # it drifted back beside x = 40: still 58 (never back along the path); at x = 70: 78
+    assert c._lost_goals(["f1"], np.array([[40.0, 3.0]]), goal, 10.1) == pytest.approx(np.array([[58.0, 0.0]]))
+    assert c._lost_goals(["f1"], np.array([[70.0, 1.0]]), goal, 10.2) == pytest.approx(np.array([[78.0, 0.0]]))
+    # at x = 93: 93 + 8 > 100 -> its goal, and so from then on wherever it is
+    assert c._lost_goals(["f1"], np.array([[93.0, 0.0]]), goal, 10.3).tolist() == goal.tolist()
+    assert c._lost_goals(["f1"], np.array([[50.0, 5.0]]), goal, 30.0).tolist() == goal.tolist()
