@@ -171,7 +171,6 @@ class ApfController:
         hd = np.array([np.cos(h), np.sin(h)])
         U, F = attraction(q_cand, target, p.k_att, p.d_att_m)
         ego_corners = footprint_corners(q_cand, np.full(C, h), np.full(C, L), np.full(C, W))  # (C,4,2)
-        strip = footprint_corners(q_cand, np.zeros(C), np.full(C, L), np.full(C, W))  # aligned with the road
 
         v_safe = np.inf
         O = len(sc.o_pos)
@@ -192,10 +191,7 @@ class ApfController:
             # road only: passing it is no threat, drifting towards it is
             # road; a standing one the ego can steer clear of in time within its lanes is passed the
             # same way, at a crawl (_squeeze, the governor)
-            # the ego's span across the road taken as aligned with it (like for the bounds below): at a turn's
-            # exit, a heading 0.5 rad off the lane's widened it by 1.1 m, an oncoming car in its own lane then
-            # counted as in the ego's strip, its push along s reversed the ego into that car's path (grid08 seed 3)
-            e_lo, e_hi = np.repeat(strip[..., 1].min(1), O), np.repeat(strip[..., 1].max(1), O)
+            e_lo, e_hi = np.repeat(ego_corners[..., 1].min(1), O), np.repeat(ego_corners[..., 1].max(1), O)
             o_lo, o_hi = np.tile(oc[..., 1].min(1), C), np.tile(oc[..., 1].max(1), C)
             side = np.sign(np.tile(sc.o_pos[:, 1], C) - np.repeat(q_cand[:, 1], O))
             lat_closing = np.maximum(v_rel[:, 1] * side, 0.0)
@@ -219,6 +215,7 @@ class ApfController:
         # the bounds of the ego's lanes, one line on each side, repel across the road (always
         # inwards: a car past a bound is pushed back, never further out) from the footprint's
         # corner nearest to each, with the bound taken at that corner's s
+        strip = footprint_corners(q_cand, np.zeros(C), np.full(C, L), np.full(C, W))  # aligned with the road
         lo, hi = sc.corridor(strip[..., 0].ravel())
         cd = strip[..., 1].ravel()
         lo_here, hi_here = sc.corridor(np.array([sc.s]))
