@@ -34,7 +34,6 @@ and what each member's shield also sees, in docs/formation.md.
 from __future__ import annotations
 
 import re
-from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,6 +43,7 @@ from sumo_avoid.control import formation_shield as shield
 from sumo_avoid.control.formation_lanes import LaneFormation
 from sumo_avoid.control.formation_road import RoadFrame
 from sumo_avoid.control.formation_sense import ObstacleLists
+from sumo_avoid.control.formation_trail import LeaderTrail
 from sumo_avoid.core.config import FieldError, field_doc
 from sumo_avoid.core.geometry import (
     convex_distance,
@@ -159,7 +159,7 @@ def forward_cone(v, heading: float, max_turn: float) -> np.ndarray:
     return float(np.hypot(*v)) * np.array([np.cos(a), np.sin(a)])
 
 
-class FormationController(ObstacleLists):
+class FormationController(ObstacleLists, LeaderTrail):
     """Leader-follower formation with the goal-aware field, width ratio gamma and modes kappa (SPEC §3)."""
 
     needs = Needs(goals=True, v2v=True)
@@ -180,11 +180,8 @@ class FormationController(ObstacleLists):
         self.kappa, self.scale, self._lower_since = 1, 1.0, None
         self.kappa_steps = [0, 0, 0]
         self.log: list[list[float]] = []  # [time_s, kappa] at every change
-        self.trail = np.zeros((0, 3))  # the leader's path: x, y, arc length s (a point every 0.5 m)
         self.gamma_min_seen = np.inf
-        self._progress: dict[str, deque] = {}  # follower -> (time, distance to its goal) once the leader is done
-        self._lost: dict[str, float | None] = {}  # follower -> how far it came along the leader's path (_lost_goals)
-        # while it follows that path; None once it reached the path's end
+        self._init_trail()
         self.last = {}  # the last step's gamma, W, W_max, gamma_min (tests, plots)
 
     def v2v_params(self) -> V2VParams:
@@ -293,46 +290,6 @@ class FormationController(ObstacleLists):
         self.gamma_min_seen = min(self.gamma_min_seen, last["gamma"])
         self.last = {**last, "kappa": self.kappa}
         return self.kappa
-
-    def _extend_trail(self, pos) -> None:
-        if not len(self.trail):
-            self.trail = np.array([[pos[0], pos[1], 0.0]])
-            return
-        d = float(np.hypot(*(pos - self.trail[-1, :2])))
-        if d >= 0.5:
-            self.trail = np.vstack([self.trail, [pos[0], pos[1], self.trail[-1, 2] + d]])
-
-    def _trail_points(self, back_m) -> np.ndarray:
-        """(E, 2) points of the trail ``back_m`` (E,) metres behind its newest point (its first
-        point if the trail is shorter)."""
-        s = np.maximum(self.trail[-1, 2] - np.asarray(back_m, float), 0.0)
-        return np.column_stack([np.interp(s, self.trail[:, 2], self.trail[:, 0]),
-                                np.interp(s, self.trail[:, 2], self.trail[:, 1])])
-
-    def _lost_goals(self, ids, pos, goals, t: float) -> np.ndarray:
-        """Goals (E, 2) once the leader is at its goal: a follower that came less than ``lost_progress_m``
-        nearer its own goal within ``lost_window_s`` is caught in a pocket of the field (arena seed 35:
-        circling in front of two obstacles until the end) and from then on aims at the point
-        ``spacing_m`` ahead on the leader's path (a way the leader drove) past the path's point nearest
-        it (never behind where it was on the path), until that point would lie beyond the path's end;
-        then at its goal again, for good."""
-        p, out = self.p, np.array(goals, float)
-        dist = np.hypot(*(out - pos).T)
-        for k, vid in enumerate(ids):
-            h = self._progress.setdefault(vid, deque())
-            h.append((t, float(dist[k])))
-            while h[0][0] < t - p.lost_window_s - 1e-9:
-                h.popleft()
-            if vid not in self._lost and h[-1][0] - h[0][0] >= p.lost_window_s - 1e-9 and h[0][1] - h[-1][1] < p.lost_progress_m:
-                self._lost[vid] = 0.0
-            if self._lost.get(vid) is not None:  # along the path, never back (its nearest point jumps)
-                s = max(self._lost[vid], float(self.trail[int(np.argmin(np.hypot(*(self.trail[:, :2] - pos[k]).T))), 2]))
-                if s + p.spacing_m < self.trail[-1, 2]:
-                    self._lost[vid] = s
-                    out[k] = self._trail_points([self.trail[-1, 2] - s - p.spacing_m])[0]
-                else:  # at the path's end: to its goal, for good (aiming back at the path made it circle)
-                    self._lost[vid] = None
-        return out
 
     def act(self, obs: Observation) -> np.ndarray:
         ids, goals = obs.ego_ids, np.array([self.tasks[v].goal for v in obs.ego_ids], float).reshape(-1, 2)
