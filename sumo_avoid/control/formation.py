@@ -298,7 +298,7 @@ class FormationController(ObstacleLists, LeaderTrail):
             _, _, nb_pos, nb_vel = obs.v2v.states(obs.snapshot, obs.ego_rows)
             t = obs.snapshot.time_s
             return self.lanes.act(obs, self.order, self.offsets, leader if leader in ids else None, nb_pos,
-                                  np.hypot(*nb_vel.T), lambda want, **last: self._switch(want, t, **last))
+                                  nb_vel, lambda want, **last: self._switch(want, t, **last))
         if not self._on_road or (self.road is None and leader not in ids):
             return self._act(obs, goals)
         if self.road is None:

@@ -24,7 +24,8 @@ leader in the leader's route frame. Every step:
    bends) towards the centre of its lane; the leader at ``leader_speed_mps`` (slowed while the
    followers lag, ``wait_*``), a follower at the leader's speed along the road plus ``k_slot_ps`` x
    its gap error (at most ``follower_max_speed_mps``). A member changes lanes one lane at a time, and
-   only when the target lane is free beside it (:func:`lane_is_free`); otherwise it keeps its lane.
+   only when the target lane is free beside it (:func:`lane_is_free`; with radar on what every member
+   sees, pooled over V2V, and the members' own positions); otherwise it keeps its lane.
    Once the leader has reached its goal, each follower drives to its own goal.
 """
 from __future__ import annotations
@@ -35,7 +36,9 @@ import numpy as np
 
 from sumo_avoid.control import formation_field as ff
 from sumo_avoid.control.apf import ApfController, ApfParams
+from sumo_avoid.core.geometry import near_any
 from sumo_avoid.core.types import EgoTask, Observation
+from sumo_avoid.sensing.perception import perceived_boxes
 
 #: A vehicle overlapping a lane by more than this across the road is in it, m.
 LANE_OVERLAP_M = 0.3
@@ -203,9 +206,37 @@ class LaneFormation:
         return c if run[0] <= c + units.min() and c + units.max() <= run[1] else lead_lane
 
     # --- driving --------------------------------------------------------------------------------
-    def drive(self, obs: Observation, vid: str, want_lane: int, cruise: float) -> np.ndarray:
+    def _beside(self, obs: Observation, vid: str, sc, view, known):
+        """What member ``vid`` knows of the lanes beside it for a lane change, in its frame: (pos (s, d),
+        length, width, speed along the road). Ground truth: its scene. Radar: a front radar does not see
+        a car alongside (a member changed lanes 0.06 m from one it could not see), so every member's
+        returns are pooled (cooperative perception over V2V: a member behind sees the car beside one
+        ahead), minus those within ``v2v_gate_m`` of a member, plus the members themselves (V2V)."""
+        if obs.detections is None:
+            return sc.o_pos, sc.o_length, sc.o_width, sc.o_vel[:, 0]
+        ids, xy, vel = known
+        parts = [perceived_boxes(d) for d in obs.detections]
+        pos, _, ln, wd, v = (np.concatenate([b[i] for b in parts]) for i in range(5))
+        keep = ~near_any(pos, xy, self.p.v2v_gate_m) if len(pos) else np.zeros(0, bool)
+        other = np.array([i != vid for i in ids])
+        snap = obs.snapshot
+        rows = [obs.ego_rows[obs.ego_ids.index(i)] for i in ids]
+        pos = np.vstack([pos[keep], xy[other]])
+        ln = np.concatenate([ln[keep], snap.length[rows][other]])
+        wd = np.concatenate([wd[keep], snap.width[rows][other]])
+        v = np.vstack([v[keep], vel[other]])
+        if not len(pos):
+            return np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0)
+        s, d = view.frame.to_frenet(pos, np.full(len(pos), sc.s), 200.0)
+        ok = np.isfinite(s)
+        s, d, ln, wd, v = s[ok], d[ok], ln[ok], wd[ok], v[ok]
+        vs, _ = view.frame.velocity_to_frenet(s, d, v)
+        return np.column_stack([s, d - view.line.offset(s)]), ln, wd, vs
+
+    def drive(self, obs: Observation, vid: str, want_lane: int, cruise: float, known) -> np.ndarray:
         """(2,) world velocity of member ``vid`` driving the road field towards the centre of its
-        lane (one lane nearer ``want_lane`` when that lane is free beside it) at ``cruise``."""
+        lane (one lane nearer ``want_lane`` when that lane is free beside it, :meth:`_beside`) at
+        ``cruise``; ``known`` = (member ids, V2V positions, V2V velocities)."""
         drv, view = self.driver, self.driver.views[vid]
         row = obs.ego_rows[obs.ego_ids.index(vid)]
         sc = drv.scene(obs, row, vid)
@@ -219,7 +250,7 @@ class LaneFormation:
             nxt = cur + int(np.sign(want - cur))
             half = 0.5 * float(piece.widths_m[min(nxt, len(piece.widths_m) - 1)])
             speed = float(sc.vel[0])
-            if lane_is_free(sc.s, speed, sc.length, sc.o_pos, sc.o_length, sc.o_width, sc.o_vel[:, 0],
+            if lane_is_free(sc.s, speed, sc.length, *self._beside(obs, vid, sc, view, known),
                             (centres[nxt] - half, centres[nxt] + half)):
                 cur = nxt
         self.lane_of[vid] = cur
@@ -230,26 +261,28 @@ class LaneFormation:
         v = drv.velocity(fld, cruise, drv.road_speed(view, sc))
         return view.to_xy_velocity(sc.s, sc.d, v, drv.step_s)
 
-    def act(self, obs: Observation, order, offsets, lead: str | None, member_xy, member_v, switch) -> np.ndarray:
-        """(E, 2) commands of the members in ``obs.ego_ids`` (see the module doc)."""
+    def act(self, obs: Observation, order, offsets, lead: str | None, member_xy, member_vel, switch) -> np.ndarray:
+        """(E, 2) commands of the members in ``obs.ego_ids`` (V2V positions ``member_xy`` and velocities
+        ``member_vel`` aligned with them; see the module doc)."""
         p, ids = self.p, obs.ego_ids
         out = np.zeros((len(ids), 2))
+        known = (list(ids), np.asarray(member_xy, float).reshape(-1, 2), np.asarray(member_vel, float).reshape(-1, 2))
         if lead is None:  # the leader is at its goal: each follower to its own, in the goal's lane
             for k, vid in enumerate(ids):
                 view = self.driver.views[vid]
                 centres = view.lane_centres(view.goal[0])
-                out[k] = self.drive(obs, vid, int(np.argmin(np.abs(centres - view.goal[1]))), p.leader_speed_mps)
+                out[k] = self.drive(obs, vid, int(np.argmin(np.abs(centres - view.goal[1]))), p.leader_speed_mps, known)
             return out
         lanes, along, s_lead, s_of = self.plan(obs, order, offsets, lead, member_xy, switch)
         err = np.array([s_lead + along[v] - s_of[v] for v in ids if v != lead])
         e_rms = float(np.sqrt((err**2).mean())) if len(err) else 0.0
         wait = float(np.clip(1.0 - p.wait_gain_pm * max(e_rms - p.wait_free_m, 0.0), p.wait_min, 1.0))
-        v_lead = float(member_v[ids.index(lead)])
+        v_lead = float(np.hypot(*known[2][ids.index(lead)]))
         for k, vid in enumerate(ids):
             if vid == lead:
                 cruise = p.leader_speed_mps * wait
             else:
                 cruise = float(np.clip(v_lead + p.k_slot_ps * (s_lead + along[vid] - s_of[vid]), 0.0,
                                        p.follower_max_speed_mps))
-            out[k] = self.drive(obs, vid, lanes[vid], cruise)
+            out[k] = self.drive(obs, vid, lanes[vid], cruise, known)
         return out
