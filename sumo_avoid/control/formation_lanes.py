@@ -38,14 +38,23 @@ from sumo_avoid.control import formation_field as ff
 from sumo_avoid.control.apf import ApfController, ApfParams
 from sumo_avoid.core.geometry import near_any
 from sumo_avoid.core.types import EgoTask, Observation
-from sumo_avoid.sensing.perception import perceived_boxes
+from sumo_avoid.sensing.perception import ASSUMED_WIDTH_M, perceived_boxes
 
-#: A vehicle overlapping a lane by more than this across the road is in it, m.
+#: A vehicle overlapping a lane by more than this across the road is in it, m ...
 LANE_OVERLAP_M = 0.3
+#: ... a radar return's assumed box (sensing.perception: car-sized, behind the return) by more than
+#: this, its half width: the box of a truck, placed from its near corner, reached 0.4 m into the next
+#: lane and blocked two lanes for one truck.
+RADAR_OVERLAP_M = 0.5 * ASSUMED_WIDTH_M
 #: Lane change gap: this much clear road ahead of and behind the car at equal speeds, m ...
 GAP_MIN_M = 3.0
-#: ... plus the closing speed times this, s.
+#: ... plus, to another member (connected: it knows the plan over V2V), the closing speed times this, s;
 GAP_HEADWAY_S = 1.5
+#: ... plus, to any other vehicle, the secure gap of SUMO's Krauss model for the one behind: it reacts
+#: after this, s, ...
+GAP_REACT_S = 1.0
+#: ... and both brake at this (SUMO's default for a passenger car), m/s^2.
+GAP_DECEL_MPS2 = 4.5
 #: A lane whose edges the carriageway's bounds cut by more than this is closed, m.
 BOUND_TOL_M = 0.3
 
@@ -56,10 +65,10 @@ def lane_units(across_m: np.ndarray, lane_width_m: float) -> np.ndarray:
 
 
 def blocked_lanes(centres, widths, bounds, obstacles, s_lead: float, behind_m: float, ahead_m: float,
-                  slow_mps: float) -> np.ndarray:
+                  slow_mps: float, overlap_m: float = LANE_OVERLAP_M) -> np.ndarray:
     """(K,) which of the K lanes (centres, widths (K,) at the leader, m) are blocked between
     ``s_lead - behind_m`` and ``s_lead + ahead_m``: by an obstacle (s, d, length, width, speed along
-    the road: (O, 5)) overlapping it by more than LANE_OVERLAP_M and slower than ``slow_mps``, or by
+    the road: (O, 5)) overlapping it by more than ``overlap_m`` and slower than ``slow_mps``, or by
     the carriageway's bounds ((lo, hi) (N,) sampled over that stretch) cutting into it."""
     c, w = np.asarray(centres, float), np.asarray(widths, float)
     lo, hi = (np.asarray(b, float) for b in bounds)
@@ -70,7 +79,7 @@ def blocked_lanes(centres, widths, bounds, obstacles, s_lead: float, behind_m: f
     if len(o):
         overlap = np.minimum(c[None] + 0.5 * w[None], o[:, 1:2] + 0.5 * o[:, 3:4]) \
             - np.maximum(c[None] - 0.5 * w[None], o[:, 1:2] - 0.5 * o[:, 3:4])
-        out |= (overlap > LANE_OVERLAP_M).any(axis=0)
+        out |= (overlap > overlap_m).any(axis=0)
     return out
 
 
@@ -130,17 +139,33 @@ def assign_lanes(units: np.ndarray, along_m: np.ndarray, kappa: int, run: tuple[
     return lanes.astype(int), along
 
 
-def lane_is_free(s: float, speed: float, length: float, o_pos, o_len, o_wid, o_vs, band: tuple[float, float]) -> bool:
+def secure_gap_m(v_behind, v_ahead, react_s: float = GAP_REACT_S, decel_mps2: float = GAP_DECEL_MPS2):
+    """Krauss's secure gap (elementwise, m): the room the vehicle behind (at ``v_behind``) needs to
+    the one ahead (at ``v_ahead``) so that, reacting after ``react_s`` and both braking at
+    ``decel_mps2``, it stops behind it: max(v_b tau + (v_b^2 - v_a^2) / 2b, 0)."""
+    vb, va = np.maximum(np.asarray(v_behind, float), 0.0), np.maximum(np.asarray(v_ahead, float), 0.0)
+    return np.maximum(vb * react_s + (vb * vb - va * va) / (2.0 * decel_mps2), 0.0)
+
+
+def lane_is_free(s: float, speed: float, length: float, o_pos, o_len, o_wid, o_vs, band: tuple[float, float],
+                 member=None) -> bool:
     """Whether a car at arc length s (its ``length``, ``speed`` along the road) may move into the lane
-    across [band] (d, m): no vehicle overlapping that band from GAP_MIN_M + closing speed x
-    GAP_HEADWAY_S behind it to the same ahead of it."""
+    across [band] (d, m): no vehicle overlapping that band nearer, bumper to bumper, than GAP_MIN_M
+    plus, for a fellow member (``member`` (O,) True; connected, it knows the plan), GAP_HEADWAY_S x the
+    closing speed, and for any other vehicle the secure gap (:func:`secure_gap_m`) of whichever of
+    the two is behind: a car coming up fast from behind must be able to brake for the member, even if
+    the member then brakes too (a member that merged 2 lanes in front of a car at 25.7 m/s and slowed
+    behind its braking leader was rear-ended)."""
     o_pos = np.asarray(o_pos, float).reshape(-1, 2)
     if not len(o_pos):
         return True
+    o_vs = np.asarray(o_vs, float)
+    member = np.zeros(len(o_pos), bool) if member is None else np.asarray(member, bool)
     inside = (o_pos[:, 1] + 0.5 * o_wid > band[0] + LANE_OVERLAP_M) & (o_pos[:, 1] - 0.5 * o_wid < band[1] - LANE_OVERLAP_M)
     ahead = o_pos[:, 0] >= s
     close = np.where(ahead, speed - o_vs, o_vs - speed)
-    room = GAP_MIN_M + GAP_HEADWAY_S * np.maximum(close, 0.0) + 0.5 * (length + o_len)
+    secure = np.where(ahead, secure_gap_m(speed, o_vs), secure_gap_m(o_vs, speed))
+    room = GAP_MIN_M + np.where(member, GAP_HEADWAY_S * np.maximum(close, 0.0), secure) + 0.5 * (length + o_len)
     return not (inside & (np.abs(o_pos[:, 0] - s) < room)).any()
 
 
@@ -182,7 +207,8 @@ class LaneFormation:
         o = np.column_stack([sc.o_pos, sc.o_length, sc.o_width, sc.o_vel[:, 0]])[keep]
         s_grid = np.linspace(sc.s - depth, sc.s + p.lookahead_m, 25)
         blocked = blocked_lanes(centres, widths, view.corridor(s_grid), o, sc.s, depth, p.lookahead_m,
-                                p.block_speed_frac * p.leader_speed_mps)
+                                p.block_speed_frac * p.leader_speed_mps,
+                                LANE_OVERLAP_M if obs.detections is None else RADAR_OVERLAP_M)
         lead_lane = int(np.argmin(np.abs(centres - sc.d)))
         run = free_run(blocked, lead_lane)
         spanned = int(units.max() - units.min()) + 1
@@ -212,26 +238,38 @@ class LaneFormation:
         a car alongside (a member changed lanes 0.06 m from one it could not see), so every member's
         returns are pooled (cooperative perception over V2V: a member behind sees the car beside one
         ahead), minus those within ``v2v_gate_m`` of a member, plus the members themselves (V2V)."""
-        if obs.detections is None:
-            return sc.o_pos, sc.o_length, sc.o_width, sc.o_vel[:, 0]
         ids, xy, vel = known
+        if obs.detections is None:
+            return sc.o_pos, sc.o_length, sc.o_width, sc.o_vel[:, 0], self._members_at(sc, view, vid, ids, xy)
         parts = [perceived_boxes(d) for d in obs.detections]
         pos, _, ln, wd, v = (np.concatenate([b[i] for b in parts]) for i in range(5))
         keep = ~near_any(pos, xy, self.p.v2v_gate_m) if len(pos) else np.zeros(0, bool)
         other = np.array([i != vid for i in ids])
         snap = obs.snapshot
         rows = [obs.ego_rows[obs.ego_ids.index(i)] for i in ids]
+        member = np.concatenate([np.zeros(int(keep.sum()), bool), np.ones(int(other.sum()), bool)])
         pos = np.vstack([pos[keep], xy[other]])
         ln = np.concatenate([ln[keep], snap.length[rows][other]])
         wd = np.concatenate([wd[keep], snap.width[rows][other]])
         v = np.vstack([v[keep], vel[other]])
         if not len(pos):
-            return np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0)
+            return np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0, bool)
         s, d = view.frame.to_frenet(pos, np.full(len(pos), sc.s), 200.0)
         ok = np.isfinite(s)
-        s, d, ln, wd, v = s[ok], d[ok], ln[ok], wd[ok], v[ok]
+        s, d, ln, wd, v, member = s[ok], d[ok], ln[ok], wd[ok], v[ok], member[ok]
         vs, _ = view.frame.velocity_to_frenet(s, d, v)
-        return np.column_stack([s, d - view.line.offset(s)]), ln, wd, vs
+        return np.column_stack([s, d - view.line.offset(s)]), ln, wd, vs, member
+
+    def _members_at(self, sc, view, vid: str, ids, xy) -> np.ndarray:
+        """(O,) which vehicles of scene ``sc`` (member ``vid``'s) are fellow members: within
+        ``v2v_gate_m`` of one's V2V position."""
+        others = np.asarray([q for i, q in zip(ids, xy) if i != vid], float).reshape(-1, 2)
+        if not len(sc.o_pos) or not len(others):
+            return np.zeros(len(sc.o_pos), bool)
+        s, d = view.frame.to_frenet(others, np.full(len(others), sc.s), 200.0)
+        ok = np.isfinite(s)
+        q = np.column_stack([s[ok], d[ok] - view.line.offset(s[ok])])
+        return near_any(sc.o_pos, q, self.p.v2v_gate_m) if len(q) else np.zeros(len(sc.o_pos), bool)
 
     def drive(self, obs: Observation, vid: str, want_lane: int, cruise: float, known) -> np.ndarray:
         """(2,) world velocity of member ``vid`` driving the road field towards the centre of its
@@ -250,8 +288,8 @@ class LaneFormation:
             nxt = cur + int(np.sign(want - cur))
             half = 0.5 * float(piece.widths_m[min(nxt, len(piece.widths_m) - 1)])
             speed = float(sc.vel[0])
-            if lane_is_free(sc.s, speed, sc.length, *self._beside(obs, vid, sc, view, known),
-                            (centres[nxt] - half, centres[nxt] + half)):
+            pos, ln, wd, vs, member = self._beside(obs, vid, sc, view, known)
+            if lane_is_free(sc.s, speed, sc.length, pos, ln, wd, vs, (centres[nxt] - half, centres[nxt] + half), member):
                 cur = nxt
         self.lane_of[vid] = cur
         ahead = drv.lookahead(math.hypot(*sc.vel))

@@ -86,10 +86,11 @@ def main(argv=None) -> int:
     for col in COLS:
         if col not in df:
             df[col] = np.nan
-    xs = [mode_x(led.parent / p) if isinstance(p, str) and p else (np.nan,) * 3 for p in df["artifacts"]]
+    xs = [mode_x(led.parent / p) if st == "done" and isinstance(p, str) and p else (np.nan,) * 3
+          for p, st in zip(df["artifacts"], df["status"])]  # a failed run's cause is in runs.csv
     df["x_kappa2"], df["x_kappa3"], df["x_kappa1"] = (list(c) for c in zip(*xs))
     (a.out / "summary.md").write_text(summary(df, "python -m sumo_avoid.studies.formation_road " + " ".join(sys.argv[1:])))
-    df[["seed", "status", *COLS, "x_kappa2", "x_kappa3", "x_kappa1"]].to_csv(a.out / "runs.csv", index=False)
+    df[["seed", "status", "error", *COLS, "x_kappa2", "x_kappa3", "x_kappa1"]].to_csv(a.out / "runs.csv", index=False)
     print((a.out / "summary.md").read_text())
     return 0
 

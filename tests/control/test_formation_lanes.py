@@ -16,11 +16,13 @@ from sumo_avoid.control.formation_lanes import (
     gamma_of,
     lane_is_free,
     lane_units,
+    secure_gap_m,
 )
 from sumo_avoid.rollout import runner
 from sumo_avoid.scenario import spec as scenario
 
 ROAD = SCENARIOS / "formation" / "road_closure.toml"
+LEFT = SCENARIOS / "formation" / "road_closure_left.toml"
 # the road case's diamond: spacing 15 m, apex 2 atan(3.5 / 15): side slots one 3.5 m lane right and left
 DIAMOND = ff.slots("diamond", 4, 15.0, 26.260)
 CENTRES, WIDTHS = np.array([-3.5, 0.0, 3.5, 7.0]), np.full(4, 3.5)  # 4 lanes, bounds -5.25 .. 8.75
@@ -42,6 +44,14 @@ def test_blocked_lanes_by_hand():
     # a stopped car straddling lanes 1 and 2 (d = 1.75, 1.8 m wide: 0.9 m into each, > 0.3) blocks both
     assert blocked_lanes(CENTRES, WIDTHS, bounds, [[620, 1.75, 4.5, 1.8, 0.0]], 600.0, 32.25, 80.0, 9.0).tolist() \
         == [False, True, True, False]
+    # a radar box of the truck in lane 3 placed from its near corner: centre d 5.75, 1.8 m wide -> 4.85 ..
+    # 6.65, 0.4 m into lane 2 (> 0.3) blocks it too; with the radar's tolerance (half the box's width,
+    # 0.9 m) it does not, and lane 3 (1.4 m overlap) stays blocked
+    radar_truck = [[620, 5.75, 4.5, 1.8, 6.0]]
+    assert blocked_lanes(CENTRES, WIDTHS, bounds, radar_truck, 600.0, 32.25, 80.0, 9.0).tolist() \
+        == [False, False, True, True]
+    assert blocked_lanes(CENTRES, WIDTHS, bounds, radar_truck, 600.0, 32.25, 80.0, 9.0, 0.9).tolist() \
+        == [False, False, False, True]
     # the left bound drops to 5.25 somewhere in the window: lane 3 (5.25 .. 8.75) is cut by 3.5 m -> closed;
     # lo rising by 0.2 m (< 0.3) leaves lane 0 open
     shut = (np.array([-5.25, -5.05, -5.25, -5.25, -5.25]), np.array([8.75, 8.75, 5.25, 8.75, 8.75]))
@@ -79,14 +89,28 @@ def test_assign_lanes_by_hand():
     assert lanes.tolist() == [3, 3, 3, 3] and gap.tolist() == [0, -15, -30, -45]
 
 
+def test_secure_gap_by_hand():
+    # behind at 25 m/s, ahead at 20: 25 x 1 + (625 - 400) / 9 = 50 m; a slower one behind needs none
+    assert secure_gap_m(25.0, 20.0) == pytest.approx(50.0)
+    assert secure_gap_m(10.0, 20.0) == 0.0
+    assert secure_gap_m(20.0, 0.0) == pytest.approx(20.0 + 400.0 / 9.0)
+
+
 def test_lane_is_free_by_hand():
     band = (1.75, 5.25)  # lane 2
-    # ego at s = 100, 20 m/s, 4.5 m long. A car 20 m ahead at 20 m/s: room 3 + 0 + 4.5 = 7.5 < 20 -> free
-    assert lane_is_free(100.0, 20.0, 4.5, [[120.0, 3.5]], np.array([4.5]), np.array([1.8]), np.array([20.0]), band)
-    # a car 10 m behind at 25 m/s closes at 5 m/s: room 3 + 7.5 + 4.5 = 15 > 10 -> not free
-    assert not lane_is_free(100.0, 20.0, 4.5, [[90.0, 3.5]], np.array([4.5]), np.array([1.8]), np.array([25.0]), band)
+    one = (np.array([4.5]), np.array([1.8]))
+    # ego at s = 100, 20 m/s, 4.5 m long. A car ahead at 20 m/s: room 3 + 20 (secure gap) + 4.5 = 27.5
+    assert lane_is_free(100.0, 20.0, 4.5, [[130.0, 3.5]], *one, np.array([20.0]), band)
+    assert not lane_is_free(100.0, 20.0, 4.5, [[125.0, 3.5]], *one, np.array([20.0]), band)
+    # ... a fellow member there needs only 3 + 1.5 x 0 + 4.5 = 7.5
+    assert lane_is_free(100.0, 20.0, 4.5, [[120.0, 3.5]], *one, np.array([20.0]), band, member=[True])
+    # a car behind at 25 m/s: room 3 + 50 + 4.5 = 57.5
+    assert not lane_is_free(100.0, 20.0, 4.5, [[50.0, 3.5]], *one, np.array([25.0]), band)
+    assert lane_is_free(100.0, 20.0, 4.5, [[40.0, 3.5]], *one, np.array([25.0]), band)
+    # a member 10 m behind at 25 m/s closes at 5 m/s: room 3 + 7.5 + 4.5 = 15 > 10 -> not free
+    assert not lane_is_free(100.0, 20.0, 4.5, [[90.0, 3.5]], *one, np.array([25.0]), band, member=[True])
     # ... the same car in lane 1 (d 0: 0.9 < 1.75 + 0.3) is not in the band -> free
-    assert lane_is_free(100.0, 20.0, 4.5, [[90.0, 0.0]], np.array([4.5]), np.array([1.8]), np.array([25.0]), band)
+    assert lane_is_free(100.0, 20.0, 4.5, [[90.0, 0.0]], *one, np.array([25.0]), band)
     assert lane_is_free(100.0, 20.0, 4.5, np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0), band)
 
 
@@ -119,3 +143,15 @@ def test_road_case_on_radar_changes_lanes_only_into_lanes_known_free():
     res = runner.run(scenario.load(ROAD, ["sim.duration_s=40", "output.plots=false", 'ego.sensor="radar"']))
     m = evaluate.run_metrics(res)
     assert m["collisions"] == 0 and m["min_gap_m"] > 1.0
+
+
+@pytest.mark.sumo
+def test_members_merge_only_where_the_car_behind_can_brake_for_them():
+    """road_closure_left seed 6 (truth) up to 25 s: the formation moves two lanes left ahead of the
+    truck while bg.1 comes up lane 2 at 25.7 m/s. With a gap check of 3 m + 1.5 s x closing speed, f2
+    merged in front of it, slowed behind the braking leader and was rear-ended at 17.8 s; with
+    Krauss's secure gap for the car behind (lane_is_free) no collision, and no member within 0.5 m of a
+    vehicle."""
+    res = runner.run(scenario.load(LEFT, ["sim.duration_s=25", "sim.seed=6", "output.plots=false"]))
+    m = evaluate.run_metrics(res)
+    assert m["collisions"] == 0 and m["sumo_collisions"] == 0 and m["min_gap_m"] > 0.5
