@@ -169,6 +169,21 @@ def lane_is_free(s: float, speed: float, length: float, o_pos, o_len, o_wid, o_v
     return not (inside & (np.abs(o_pos[:, 0] - s) < room)).any()
 
 
+def near_members(o_pos, member_sd, gate_m: float) -> np.ndarray:
+    """(O,) which vehicles at ``o_pos`` (O, 2) are members: within ``gate_m`` of a member's V2V position
+    ``member_sd`` (M, 2), both in one route frame (members the frame does not reach left out)."""
+    q = np.asarray(member_sd, float).reshape(-1, 2)
+    return near_any(o_pos, q[np.isfinite(q).all(axis=1)], gate_m)
+
+
+def in_frame(view, s_hint: float, xy, window_m: float) -> np.ndarray:
+    """(N, 2) world points ``xy`` as (s, d from the route's reference line) in ``view``'s frame
+    (NaN where the frame does not reach them within ``window_m`` of ``s_hint``)."""
+    xy = np.asarray(xy, float).reshape(-1, 2)
+    s, d = view.frame.to_frenet(xy, np.full(len(xy), s_hint), window_m)
+    return np.column_stack([s, d - view.line.offset(s)])
+
+
 class LaneFormation:
     """The members' road driving for :class:`~sumo_avoid.control.formation.FormationController`."""
 
@@ -176,6 +191,7 @@ class LaneFormation:
         self.p = p
         self.driver = ApfController(ApfParams(), ctx)
         self.lane_of: dict[str, int] = {}
+        self._pool = (None, None)  # (the observation, every member's radar returns pooled): once a step
 
     def add_ego(self, task: EgoTask) -> None:
         self.driver.add_ego(task)
@@ -199,11 +215,8 @@ class LaneFormation:
         lane_w = float(np.mean(widths))
         units = lane_units(offsets[:, 1], lane_w)
         depth = float(-offsets[:, 0].min()) + 0.5 * sc.length
-        ms, md = view.frame.to_frenet(np.asarray(member_xy, float).reshape(-1, 2), np.full(len(member_xy), sc.s), 300.0)
-        member_sd = np.column_stack([ms, md - view.line.offset(ms)])
-        keep = np.ones(len(sc.o_pos), bool)
-        for q in member_sd:  # members are known over V2V, not obstacles of the formation's lanes
-            keep &= np.hypot(*(sc.o_pos - q).T) > p.v2v_gate_m
+        member_sd = in_frame(view, sc.s, member_xy, 300.0)
+        keep = ~near_members(sc.o_pos, member_sd, p.v2v_gate_m)  # members are known over V2V, not obstacles
         o = np.column_stack([sc.o_pos, sc.o_length, sc.o_width, sc.o_vel[:, 0]])[keep]
         s_grid = np.linspace(sc.s - depth, sc.s + p.lookahead_m, 25)
         blocked = blocked_lanes(centres, widths, view.corridor(s_grid), o, sc.s, depth, p.lookahead_m,
@@ -239,19 +252,18 @@ class LaneFormation:
         returns are pooled (cooperative perception over V2V: a member behind sees the car beside one
         ahead), minus those within ``v2v_gate_m`` of a member, plus the members themselves (V2V)."""
         ids, xy, vel = known
-        if obs.detections is None:
-            return sc.o_pos, sc.o_length, sc.o_width, sc.o_vel[:, 0], self._members_at(sc, view, vid, ids, xy)
-        parts = [perceived_boxes(d) for d in obs.detections]
-        pos, _, ln, wd, v = (np.concatenate([b[i] for b in parts]) for i in range(5))
-        keep = ~near_any(pos, xy, self.p.v2v_gate_m) if len(pos) else np.zeros(0, bool)
         other = np.array([i != vid for i in ids])
+        if obs.detections is None:  # its scene, fellow members marked
+            member = near_members(sc.o_pos, in_frame(view, sc.s, xy[other], 200.0), self.p.v2v_gate_m)
+            return sc.o_pos, sc.o_length, sc.o_width, sc.o_vel[:, 0], member
+        pos, ln, wd, v = self._pooled(obs, xy)
         snap = obs.snapshot
         rows = [obs.ego_rows[obs.ego_ids.index(i)] for i in ids]
-        member = np.concatenate([np.zeros(int(keep.sum()), bool), np.ones(int(other.sum()), bool)])
-        pos = np.vstack([pos[keep], xy[other]])
-        ln = np.concatenate([ln[keep], snap.length[rows][other]])
-        wd = np.concatenate([wd[keep], snap.width[rows][other]])
-        v = np.vstack([v[keep], vel[other]])
+        member = np.concatenate([np.zeros(len(pos), bool), np.ones(int(other.sum()), bool)])
+        pos = np.vstack([pos, xy[other]])
+        ln = np.concatenate([ln, snap.length[rows][other]])
+        wd = np.concatenate([wd, snap.width[rows][other]])
+        v = np.vstack([v, vel[other]])
         if not len(pos):
             return np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0, bool)
         s, d = view.frame.to_frenet(pos, np.full(len(pos), sc.s), 200.0)
@@ -260,16 +272,16 @@ class LaneFormation:
         vs, _ = view.frame.velocity_to_frenet(s, d, v)
         return np.column_stack([s, d - view.line.offset(s)]), ln, wd, vs, member
 
-    def _members_at(self, sc, view, vid: str, ids, xy) -> np.ndarray:
-        """(O,) which vehicles of scene ``sc`` (member ``vid``'s) are fellow members: within
-        ``v2v_gate_m`` of one's V2V position."""
-        others = np.asarray([q for i, q in zip(ids, xy) if i != vid], float).reshape(-1, 2)
-        if not len(sc.o_pos) or not len(others):
-            return np.zeros(len(sc.o_pos), bool)
-        s, d = view.frame.to_frenet(others, np.full(len(others), sc.s), 200.0)
-        ok = np.isfinite(s)
-        q = np.column_stack([s[ok], d[ok] - view.line.offset(s[ok])])
-        return near_any(sc.o_pos, q, self.p.v2v_gate_m) if len(q) else np.zeros(len(sc.o_pos), bool)
+    def _pooled(self, obs: Observation, xy):
+        """Every member's radar returns as assumed boxes (world pos, length, width, velocity), minus
+        those within ``v2v_gate_m`` of a member's V2V position ``xy``: the same for every member, so
+        built once per observation."""
+        if self._pool[0] is not obs:
+            parts = [perceived_boxes(d) for d in obs.detections]
+            pos, _, ln, wd, v = (np.concatenate([b[i] for b in parts]) for i in range(5))
+            keep = ~near_any(pos, xy, self.p.v2v_gate_m) if len(pos) else np.zeros(0, bool)
+            self._pool = (obs, (pos[keep], ln[keep], wd[keep], v[keep]))
+        return self._pool[1]
 
     def drive(self, obs: Observation, vid: str, want_lane: int, cruise: float, known) -> np.ndarray:
         """(2,) world velocity of member ``vid`` driving the road field towards the centre of its

@@ -349,9 +349,15 @@ def config_from_args(args) -> BatchConfig:
                        start=args.start, **kw)
 
 
+def workers_or_cores(n: int | None) -> int:
+    """A ``--workers`` flag: a positive integer, or None for the number of cores (else ScenarioError)."""
+    if n is not None and n < 1:
+        raise ScenarioError("<command line>", "--workers", "a positive integer", n)
+    return n if n is not None else (os.cpu_count() or 1)
+
+
 def _check_flags(args) -> None:
-    if args.workers is not None and args.workers < 1:
-        raise ScenarioError("<command line>", "--workers", "a positive integer", args.workers)
+    workers_or_cores(args.workers)
     if args.timeout is not None and not 0 < args.timeout < math.inf:
         raise ScenarioError("<command line>", "--timeout", "a positive number of seconds", args.timeout)
     if args.start is not None and args.start not in worker.STARTS:

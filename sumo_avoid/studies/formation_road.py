@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import pathlib
 import sys
 
@@ -75,12 +74,13 @@ def main(argv=None) -> int:
     led = a.out / "ledger.sqlite"
     try:
         seeds = batch.parse_seeds(a.seeds, key="--seeds")
+        workers = batch.workers_or_cores(a.workers)
         ledger_mod.check(led, "--out")
         specs = tuple(batch.plan(a.scenario, s, ("output.plots=false", *a.overrides), None) for s in seeds)
     except ScenarioError as e:  # bad input: one line, exit 2, nothing written
         print(f"error: {e}", file=sys.stderr)
         return 2
-    c = batch.run_batch(batch.BatchConfig(specs, led, workers=a.workers or os.cpu_count() or 1))
+    c = batch.run_batch(batch.BatchConfig(specs, led, workers=workers))
     print(f"formation road: {c['done']} done, {c['failed']} failed, {c['skipped']} already recorded -> {led}")
     df = ledger_mod.read(led).set_index("key").loc[[s.key for s in specs]].reset_index()
     for col in COLS:

@@ -12,7 +12,6 @@ shares; the paired Wilcoxon signed-rank test of fixed against tuned on the same 
 from __future__ import annotations
 
 import json
-import os
 import pathlib
 import sys
 
@@ -121,6 +120,7 @@ def figure(df: pd.DataFrame, root: pathlib.Path, scn: str, out_png: pathlib.Path
 
 def run(args) -> int:
     seeds = batch.parse_seeds(args.seeds, key="--runs")
+    workers = batch.workers_or_cores(args.workers)
     tuned = tuned_overrides(args.tuned)
     extra = ("output.plots=false",) + ((f"random_obstacles.count={args.obstacles}",) if args.obstacles else ())
     scenarios = tuple(args.scenarios) or DEFAULT
@@ -128,7 +128,7 @@ def run(args) -> int:
     led = args.out / "ledger.sqlite"
     ledger_mod.check(led, "--out")  # a folder that holds (or can hold) the study's ledger
     every = tuple(s for v in runs.values() for s in v)
-    cfg = batch.BatchConfig(every, led, workers=args.workers or os.cpu_count() or 1, scheduler=args.scheduler,
+    cfg = batch.BatchConfig(every, led, workers=workers, scheduler=args.scheduler,
                             retry_failed=bool(getattr(args, "retry_failed", False)))
     c = batch.run_batch(cfg)
     print(f"reproduce formation: {c['done']} done, {c['failed']} failed, {c['skipped']} already recorded -> {led}")

@@ -20,7 +20,6 @@ import dataclasses
 import difflib
 import math
 import operator
-import os
 import pathlib
 import re
 import tempfile
@@ -241,8 +240,7 @@ def add_parser(sub) -> None:
 
 def cmd_suite(args) -> int:
     entries = load(args.suite, args.seeds, args.overrides)
-    if args.workers is not None and args.workers < 1:
-        raise ScenarioError("<command line>", "--workers", "a positive integer", args.workers)
+    workers = batch.workers_or_cores(args.workers)
     if not 0 < args.timeout < math.inf:
         raise ScenarioError("<command line>", "--timeout", "a positive number of seconds", args.timeout)
     if args.junit:
@@ -259,7 +257,7 @@ def cmd_suite(args) -> int:
     check_criteria(entries, str(args.suite))
     with tempfile.TemporaryDirectory(prefix="sumo-avoid-suite-") as tmp:
         led = args.ledger or pathlib.Path(tmp) / "ledger.sqlite"
-        cfg = batch.BatchConfig(tuple(all_runs), led, workers=args.workers or os.cpu_count() or 1,
+        cfg = batch.BatchConfig(tuple(all_runs), led, workers=workers,
                                 timeout_s=args.timeout, scheduler=args.scheduler)
         print(f"suite {args.suite}: {len(entries)} entries, {len(all_runs)} runs", flush=True)
         batch.run_batch(cfg, progress=False if args.quiet else None)

@@ -15,7 +15,6 @@ the same candidates and the ledger supplies every finished run. Writes to ``--ou
 from __future__ import annotations
 
 import math
-import os
 import pathlib
 import sys
 import time
@@ -161,8 +160,7 @@ def _check(args) -> None:
                        ("--first-seed", args.first_seed, 0)):
         if v < lo:
             raise ScenarioError(cl, key, f"an integer >= {lo}", v)
-    if args.workers is not None and args.workers < 1:
-        raise ScenarioError(cl, "--workers", "a positive integer", args.workers)
+    batch.workers_or_cores(args.workers)
     if not 0.0 < args.beta <= 2.0:
         raise ScenarioError(cl, "--beta", "a number in (0, 2]", args.beta)
     if not 0.0 <= args.pa < 1.0:
@@ -183,7 +181,7 @@ def cmd_tune(args) -> int:
     led = args.ledger or args.out / "ledger.sqlite"
     check_out_file(args.out / "tuned.toml", "--out")  # refused now, not after the search
     ledger_mod.check(led, "--ledger")
-    cfg = {"ledger": led, "workers": args.workers or os.cpu_count() or 1, "scheduler": args.scheduler}
+    cfg = {"ledger": led, "workers": batch.workers_or_cores(args.workers), "scheduler": args.scheduler}
     show = not args.quiet and sys.stderr.isatty()
     ev = Evaluator(args.scenario, seeds, sets, cfg, args.penalty, progress=False)
     t0 = time.perf_counter()

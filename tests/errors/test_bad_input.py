@@ -164,6 +164,8 @@ CASES: dict[str, Case] = {
                                 "--set", "controllers.flocking.nope=1", "--out", "{tmp}/o"],
                                ["controllers.flocking.nope"]),
     "reproduce_formation_runs": _flag(["reproduce", "formation", "--runs", "5-1", "--out", "{tmp}/o"], ["--runs"]),
+    "reproduce_formation_workers_zero": _flag(["reproduce", "formation", "--runs", "1", "--workers", "0", "--out",
+                                               "{tmp}/o"], ["--workers"]),
     "tune_controller": _flag(["tune", "apf", SCN, "--out", "{tmp}/o"], ["controller"]),
     "tune_nests": _flag(["tune", "formation", SCN, "--nests", "1", "--out", "{tmp}/o"], ["--nests"]),
     "tune_out_is_file": _flag(["tune", "formation", SCN, "--generations", "0", "--nests", "2", "--seeds", "1",
