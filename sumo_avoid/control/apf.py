@@ -299,8 +299,9 @@ class ApfController:
         for k, (vid, row) in enumerate(zip(obs.ego_ids, obs.ego_rows)):
             task, view = self.tasks[vid], self.views[vid]
             sc = self.scene(obs, row, vid)
-            fld = self.field(sc, sc.q[None, :], self.carrot(view, sc))
+            offset, v_lane = view.lane_change(sc, self.p.gov_decel_mps2)  # the path's lane changes wait for a gap
+            fld = self.field(sc, sc.q[None, :], self.carrot(view, sc, offset))
             self.last_force[vid] = float(np.hypot(*fld.F[0]))
-            v = self.velocity(fld, task.cruise_speed_mps, self.road_speed(view, sc))
+            v = self.velocity(fld, task.cruise_speed_mps, min(self.road_speed(view, sc), v_lane))
             out[k] = view.to_xy_velocity(sc.s, sc.d, v, self.step_s)
         return out

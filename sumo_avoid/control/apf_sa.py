@@ -113,10 +113,13 @@ class ApfSaController(ApfController):
             st.history.append((t, sc.s))
             while st.history and st.history[0][0] < t - p.trap_window_s - 1e-9:
                 st.history.popleft()
-            target = self.carrot(view, sc, st.escape_offset or 0.0)
+            offset, v_lane = view.lane_change(sc, p.gov_decel_mps2)  # the path's lane changes wait for a gap
+            if st.escape_offset is not None:
+                offset, v_lane = st.escape_offset, np.inf
+            target = self.carrot(view, sc, offset)
             fld = self.field(sc, sc.q[None, :], target)
             force = float(np.hypot(*fld.F[0]))
-            v_road = self.road_speed(view, sc)
+            v_road = min(self.road_speed(view, sc), v_lane)  # waiting for a gap is not being trapped
             v_ref = min(task.cruise_speed_mps, v_road)  # a car slowed for a bend is not trapped
 
             window_full = st.history[-1][0] - st.history[0][0] >= p.trap_window_s - 1e-9

@@ -36,25 +36,16 @@ import numpy as np
 
 from sumo_avoid.control import formation_field as ff
 from sumo_avoid.control.apf import ApfController, ApfParams
+from sumo_avoid.core.gaps import LANE_OVERLAP_M, lane_is_free
 from sumo_avoid.core.geometry import near_any
 from sumo_avoid.core.types import EgoTask, Observation
 from sumo_avoid.sensing.perception import ASSUMED_WIDTH_M, perceived_boxes
 
-#: A vehicle overlapping a lane by more than this across the road is in it, m ...
-LANE_OVERLAP_M = 0.3
-#: ... a radar return's assumed box (sensing.perception: car-sized, behind the return) by more than
-#: this, its half width: the box of a truck, placed from its near corner, reached 0.4 m into the next
-#: lane and blocked two lanes for one truck.
+#: A radar return's assumed box (sensing.perception: car-sized, behind the return) is in a lane when
+#: it overlaps it by more than this, its half width (core.gaps.LANE_OVERLAP_M for true footprints): the
+#: box of a truck, placed from its near corner, reached 0.4 m into the next lane and blocked two lanes
+#: for one truck.
 RADAR_OVERLAP_M = 0.5 * ASSUMED_WIDTH_M
-#: Lane change gap: this much clear road ahead of and behind the car at equal speeds, m ...
-GAP_MIN_M = 3.0
-#: ... plus, to another member (connected: it knows the plan over V2V), the closing speed times this, s;
-GAP_HEADWAY_S = 1.5
-#: ... plus, to any other vehicle, the secure gap of SUMO's Krauss model for the one behind: it reacts
-#: after this, s, ...
-GAP_REACT_S = 1.0
-#: ... and both brake at this (SUMO's default for a passenger car), m/s^2.
-GAP_DECEL_MPS2 = 4.5
 #: A lane whose edges the carriageway's bounds cut by more than this is closed, m.
 BOUND_TOL_M = 0.3
 
@@ -137,36 +128,6 @@ def assign_lanes(units: np.ndarray, along_m: np.ndarray, kappa: int, run: tuple[
             along[k] = min(along[k], last[ln] - spacing_m)
         last[ln] = along[k]
     return lanes.astype(int), along
-
-
-def secure_gap_m(v_behind, v_ahead, react_s: float = GAP_REACT_S, decel_mps2: float = GAP_DECEL_MPS2):
-    """Krauss's secure gap (elementwise, m): the room the vehicle behind (at ``v_behind``) needs to
-    the one ahead (at ``v_ahead``) so that, reacting after ``react_s`` and both braking at
-    ``decel_mps2``, it stops behind it: max(v_b tau + (v_b^2 - v_a^2) / 2b, 0)."""
-    vb, va = np.maximum(np.asarray(v_behind, float), 0.0), np.maximum(np.asarray(v_ahead, float), 0.0)
-    return np.maximum(vb * react_s + (vb * vb - va * va) / (2.0 * decel_mps2), 0.0)
-
-
-def lane_is_free(s: float, speed: float, length: float, o_pos, o_len, o_wid, o_vs, band: tuple[float, float],
-                 member=None) -> bool:
-    """Whether a car at arc length s (its ``length``, ``speed`` along the road) may move into the lane
-    across [band] (d, m): no vehicle overlapping that band nearer, bumper to bumper, than GAP_MIN_M
-    plus, for a fellow member (``member`` (O,) True; connected, it knows the plan), GAP_HEADWAY_S x the
-    closing speed, and for any other vehicle the secure gap (:func:`secure_gap_m`) of whichever of
-    the two is behind: a car coming up fast from behind must be able to brake for the member, even if
-    the member then brakes too (a member that merged 2 lanes in front of a car at 25.7 m/s and slowed
-    behind its braking leader was rear-ended)."""
-    o_pos = np.asarray(o_pos, float).reshape(-1, 2)
-    if not len(o_pos):
-        return True
-    o_vs = np.asarray(o_vs, float)
-    member = np.zeros(len(o_pos), bool) if member is None else np.asarray(member, bool)
-    inside = (o_pos[:, 1] + 0.5 * o_wid > band[0] + LANE_OVERLAP_M) & (o_pos[:, 1] - 0.5 * o_wid < band[1] - LANE_OVERLAP_M)
-    ahead = o_pos[:, 0] >= s
-    close = np.where(ahead, speed - o_vs, o_vs - speed)
-    secure = np.where(ahead, secure_gap_m(speed, o_vs), secure_gap_m(o_vs, speed))
-    room = GAP_MIN_M + np.where(member, GAP_HEADWAY_S * np.maximum(close, 0.0), secure) + 0.5 * (length + o_len)
-    return not (inside & (np.abs(o_pos[:, 0] - s) < room)).any()
 
 
 def near_members(o_pos, member_sd, gate_m: float) -> np.ndarray:

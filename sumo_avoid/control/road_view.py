@@ -20,6 +20,7 @@ import numpy as np
 
 from sumo_avoid.core.drivable import NONE, drivable_line
 from sumo_avoid.core.frenet import RouteFrame
+from sumo_avoid.core.gaps import lane_is_free
 from sumo_avoid.core.geometry import wrap_angle
 from sumo_avoid.core.lanes import RouteLanes
 from sumo_avoid.core.polyline import arc_lengths
@@ -34,6 +35,8 @@ OUTSIDE_MARGIN_M = 0.2
 LINE_CLEAR_M = 1.0
 #: On a drivable line, the speed leaves this share of the largest yaw rate for corrections.
 YAW_RESERVE = 0.75
+#: A car waiting for a gap to change lanes stops this far before its lane starts to taper off, m.
+LANE_END_CLEAR_M = 1.0
 #: Window of the ego's own projection around its last arc length, m.
 TRACK_WINDOW_M = 30.0
 
@@ -120,6 +123,30 @@ class RoadView:
         if self.lanes is None:
             return None
         return self.lanes.centres(s)[1] - self.line.offset(s)[0]
+
+    def lane_change(self, sc: FrenetScene, decel_mps2: float) -> tuple[float, float]:
+        """Where the path changes lanes (an edge entered on a lane that does not lead on along the
+        route), the lateral offset to follow and a speed limit, m/s. (0, inf): follow the path into
+        the next lane towards the route's, which is free beside the ego (:func:`~sumo_avoid.core.gaps.lane_is_free`:
+        the secure gap to whatever it senses behind and ahead in that lane). Otherwise the ego keeps
+        the centre of the lane it is in and, at ``decel_mps2``, stops before that lane tapers off
+        (:meth:`~sumo_avoid.core.lanes.RouteLanes.lanes_end_s`) to wait there for the gap."""
+        if self.lanes is None:
+            return 0.0, np.inf
+        piece, centres = self.lanes.centres(sc.s)
+        if len(centres) < 2 or piece.edge.startswith(":"):
+            return 0.0, np.inf
+        centres = centres - self.line.offset(sc.s)[0]
+        own = int(np.argmin(np.abs(centres - sc.d)))
+        if own == piece.lane:
+            return 0.0, np.inf
+        nxt = own + (1 if piece.lane > own else -1)
+        half = 0.5 * piece.widths_m[nxt]
+        if lane_is_free(sc.s, float(sc.vel[0]), sc.length, sc.o_pos, sc.o_length, sc.o_width, sc.o_vel[:, 0],
+                        (centres[nxt] - half, centres[nxt] + half)):
+            return 0.0, np.inf
+        room = self.lanes.lanes_end_s(sc.s) - LANE_END_CLEAR_M - (sc.s + 0.5 * sc.length)
+        return float(centres[own]), float(np.sqrt(2.0 * decel_mps2 * max(room, 0.0)))
 
     def _from_line(self, s, d, rel_heading, vel):
         """Lane-centre frame -> the drivable line's: d, relative heading and velocity (s_dot, d_dot)

@@ -70,6 +70,18 @@ class RouteLanes:
         return np.interp(s, self._s, self._lo) - m, np.interp(s, self._s, self._hi) + m
 
 
+    def lanes_end_s(self, s: float) -> float:
+        """Arc length where the lanes of the edge at s that do not continue the route start to taper
+        off (the corridor's taper, see the module doc), or where the edge ends if nothing follows it:
+        a car in such a lane must be out of it, or stopped, by then."""
+        k = self.pieces.index(self.centres(s)[0])
+        while k + 1 < len(self.pieces) and self.pieces[k + 1].edge == self.pieces[k].edge:
+            k += 1
+        p = self.pieces[k]
+        if k + 1 < len(self.pieces) and _is_internal(self.pieces[k + 1]) and p.s_end_m - p.s_start_m > _EPS:
+            return max(p.s_start_m, p.s_end_m - min(TAPER_M, 0.5 * (p.s_end_m - p.s_start_m)))
+        return p.s_end_m
+
     def lane_at(self, s: float, d: float) -> tuple[str, int] | None:
         """(SUMO edge id, lane index) of the lane of the ego's direction nearest to (s, d), or None
         when d is outside the corridor at s (off the route: in an oncoming lane, off the road)."""

@@ -90,7 +90,7 @@ class Detections:
     azimuth_rad: np.ndarray  # (D,) CCW from the boresight
     radial_speed_mps: np.ndarray  # (D,) relative speed along the line of sight (< 0 closing)
     target: tuple[str, ...] = field(default=())  # (D,) true target id, "" = false alarm. EVALUATION ONLY
-    mount: str = "front"  # which radar: "front" (boresight = heading) or "rear" (boresight = heading + pi)
+    mount: str = "front"  # which radar: "front" (boresight = heading), "rear" (heading + pi), "left" / "right" (heading + / - pi/2)
 
     @property
     def n(self) -> int:

@@ -7,6 +7,8 @@ from sumo_avoid.sensing.radar import Radar, RadarParams
 from sumo_avoid.sensing.sensors import RadarSensor, TruthSensor
 from sumo_avoid.sensing.v2v import V2VLink
 
+_STREAM = {"front": 4, "rear": 5, "left": 8, "right": 9}  # each mount's noise stream (ctx.rng)
+
 
 def _link(v2v, ctx):
     return V2VLink(v2v, ctx.rng()) if v2v is not None else None
@@ -19,9 +21,9 @@ def truth(params: RadarParams, ctx, *, needs_scans: bool = False, v2v=None) -> T
 
 
 def radar(params: RadarParams, ctx, *, needs_scans: bool = True, v2v=None) -> RadarSensor:
-    """Front radar (+ rear with radar.rear), tracker memory."""
-    rear = Radar(params, ctx.rng(5), mount="rear") if params.rear else None
-    return RadarSensor(Radar(params, ctx.rng(4)), rear, ctx.obstacles, _link(v2v, ctx))
+    """Front radar (+ rear with radar.rear, + left and right with radar.side), one tracker memory."""
+    return RadarSensor(tuple(Radar(params, ctx.rng(_STREAM[m]), mount=m) for m in params.mounts()),
+                       ctx.obstacles, _link(v2v, ctx))
 
 
 SENSORS = Registry("sensor")

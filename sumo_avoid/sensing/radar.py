@@ -1,9 +1,11 @@
 """A forward radar emulator (SPEC §4, seed 004 §1.1) for all egos at once.
 
 Each ego carries one radar at the centre of its front bumper, boresight along the ego's heading,
-and optionally (``rear = true``) a second one at the rear bumper looking back (another
-:class:`Radar` with ``mount="rear"``, its own scan and memory; the danger-time layer reads only
-the front one).
+and optionally (``rear = true``) a second one at the rear bumper looking back, and (``side =
+true``) one on each flank, mid-side, looking left / right with their own field of view and range
+(``side_fov_deg``, ``side_range_m``: blind-spot radars, the only ones that see a car alongside).
+Each mount is a :class:`Radar` with its own scan; one tracker memory serves them all; the
+danger-time layer reads only the front one.
 Per scan it reports, for every target it can see, one return at the target's nearest visible
 point: its **range**, its **azimuth** (rad, CCW from the boresight) and the **radial speed** (the
 target's velocity relative to the ego projected on the line of sight, m/s; negative = closing).
@@ -41,7 +43,7 @@ k-d tree formulation they replaced (kept as the reference in tests/sensing/radar
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -69,6 +71,11 @@ class RadarParams:
     log_detections: bool = field_doc(False, doc="keep every scan's detections (detections.csv)")
     rear: bool = field_doc(False, doc="also a rear-facing radar at the rear bumper centre, same parameters "
                                       "(lane-change / blind-spot assist: sees traffic closing from behind)")
+    side: bool = field_doc(False, doc="also a side radar on each flank (mid-side, boresight 90 degrees left / "
+                                      "right; blind-spot monitoring: sees a car alongside, which front and rear "
+                                      "radars cannot), with side_fov_deg and side_range_m")
+    side_fov_deg: float = field_doc(150.0, doc="full horizontal field of view of each side radar, degrees (< 180)")
+    side_range_m: float = field_doc(40.0, doc="maximum range of each side radar, m")
 
     def __post_init__(self):
         if self.max_range_m <= 0:
@@ -82,6 +89,18 @@ class RadarParams:
             raise ValueError("radar noise sigmas and false_alarm_rate >= 0")
         if not 0 <= self.detection_prob <= 1:
             raise ValueError("0 <= radar.detection_prob <= 1")
+        if not 0 < self.side_fov_deg < 180:
+            raise ValueError("0 < radar.side_fov_deg < 180")
+        if self.side_range_m <= 0:
+            raise ValueError("radar.side_range_m > 0")
+
+    def mounts(self) -> tuple[str, ...]:
+        """The radars these parameters fit on each ego, front first."""
+        return ("front",) + (("rear",) if self.rear else ()) + (("left", "right") if self.side else ())
+
+    def view(self, mount: str) -> tuple[float, float]:
+        """(full field of view, degrees; range, m) of the radar at ``mount``."""
+        return (self.side_fov_deg, self.side_range_m) if mount in SIDES else (self.fov_deg, self.max_range_m)
 
 
 def targets(snap, obstacles=()):
@@ -103,7 +122,12 @@ def targets(snap, obstacles=()):
             np.concatenate([centre, oc]), np.concatenate([radius, orad]))
 
 
-MOUNTS = ("front", "rear")
+MOUNTS = ("front", "rear", "left", "right")
+SIDES = ("left", "right")
+# boresight relative to the heading, rad; the front and rear radars sit at the bumper's centre, the
+# side radars at the middle of the flank (+1 left, -1 right)
+_TURN = {"front": 0.0, "rear": math.pi, "left": 0.5 * math.pi, "right": -0.5 * math.pi}
+_FLANK = {"left": 1.0, "right": -1.0}
 
 
 class Radar:
@@ -112,14 +136,18 @@ class Radar:
     def __init__(self, params: RadarParams, rng: np.random.Generator, mount: str = "front"):
         if mount not in MOUNTS:
             raise ValueError(f"radar mount must be one of {MOUNTS}")
-        self.p = params
+        self.params = params  # as given (the tracker's views of every mount)
+        fov, rng_m = params.view(mount)
+        # this mount's own field of view and range (a side radar's differ from the front's)
+        self.p = params if mount not in SIDES else replace(params, fov_deg=fov, max_range_m=rng_m)
         self.mount = mount
         self.rng = rng
         self._last: Detections | None = None
         self.log: list[Detections] = []
         occlusion.warm()  # load the compiled kernel now, with the set-up, not inside the first step
         self._scan, self._candidates = occlusion.scan, occlusion.candidates
-        self.tracker = Tracker(params.memory_s, params.fov_deg, params.max_range_m) if params.memory_s > 0 else None
+        views = {m: params.view(m) for m in params.mounts()}
+        self.tracker = Tracker(params.memory_s, params.fov_deg, params.max_range_m, views=views) if params.memory_s > 0 else None
 
     def objects(self, det, along=None):
         """What controllers get: the scan plus remembered returns now out of view (sensors.tracker).
@@ -142,9 +170,13 @@ class Radar:
 
     # --- the physics -----------------------------------------------------------------------
     def pose(self, snap, rows):
-        """Sensor positions (E, 2) (bumper centres), boresights (E,) rad and their unit vectors (E, 2)."""
-        hd = snap.heading[rows] if self.mount == "front" else wrap_angle(snap.heading[rows] + np.pi)  # rear looks back
+        """Sensor positions (E, 2) (bumper or flank centres), boresights (E,) rad and their unit vectors (E, 2)."""
+        h = snap.heading[rows]
+        hd = h if self.mount == "front" else wrap_angle(h + _TURN[self.mount])  # rear looks back, sides sideways
         fwd = np.column_stack([np.cos(hd), np.sin(hd)])
+        if self.mount in SIDES:
+            left = np.column_stack([-np.sin(h), np.cos(h)])
+            return snap.pos[rows] + (_FLANK[self.mount] * 0.5 * snap.width[rows])[:, None] * left, hd, fwd
         return snap.pos[rows] + 0.5 * snap.length[rows][:, None] * fwd, hd, fwd
 
     def measure(self, snap, ego_ids, obstacles=()) -> Detections:

@@ -3,8 +3,9 @@
 * ``truth``: the controllers read the whole snapshot (``Observation.detections is None``). When a
   layer needs radar scans (the danger-time layer), a front radar scans all the same and its scans
   go to the layers only (``Observation.scans``).
-* ``radar``: each ego's front radar (and a rear one with ``radar.rear``); controllers get the scans
-  plus the tracker's memory of returns out of view (one fused memory for both mounts), and the
+* ``radar``: each ego's front radar (a rear one with ``radar.rear``, side ones with ``radar.side``);
+  controllers get the scans plus the tracker's memory of returns out of view (one fused memory for
+  all mounts), and the
   traffic's direction at each ego (its route path's nearest segment), along which returns are
   taken to move (:mod:`.perception`).
 
@@ -59,12 +60,12 @@ class TruthSensor(_Base):
 
 
 class RadarSensor(_Base):
-    """Front radar (+ rear radar), tracker memory, route direction per ego."""
+    """Front radar (+ rear and side radars), tracker memory, route direction per ego."""
 
-    def __init__(self, front: Radar, rear: Radar | None = None, obstacles=(), v2v=None):
+    def __init__(self, radars: tuple[Radar, ...], obstacles=(), v2v=None):
         super().__init__(obstacles, v2v)
-        self.front, self.rear = front, rear
-        self.radars = (front,) if rear is None else (front, rear)
+        self.front = radars[0]  # its tracker is the one memory of all mounts
+        self.radars = tuple(radars)
         self._paths: dict[str, np.ndarray] = {}
         self._seg_key, self._segs = None, None  # route_segments() of the egos in _seg_key
 

@@ -6,7 +6,7 @@ last seen, coasting it at the velocity estimated from that return (:func:`.perce
 motion along the ego's heading that explains the radial speed) while it stays outside
 the field of view or beyond the range. A remembered return that should be visible now but is not
 matched by a new return within ``gate_m`` is dropped. No target ids are used.
-With a rear radar too, one memory serves both (see :meth:`Tracker.update`).
+With rear and side radars too, one memory serves them all (see :meth:`Tracker.update`).
 Output: a :class:`~.radar.Detections` whose rows are the current returns followed by the coasted
 ones, range and azimuth recomputed from each ego's current sensor pose (azimuths may lie outside
 the field of view), so controllers read it exactly like a scan.
@@ -33,10 +33,13 @@ def _near_same_ego(p, e, q, f, gate_m: float) -> np.ndarray:
 
 
 class Tracker:
-    def __init__(self, memory_s: float, fov_deg: float, max_range_m: float, gate_m: float = 3.0):
+    def __init__(self, memory_s: float, fov_deg: float, max_range_m: float, gate_m: float = 3.0, views=None):
+        """``views``: {mount: (fov_deg, max_range_m)} of mounts whose view differs (side radars);
+        the others see ``fov_deg`` and ``max_range_m``."""
         self.memory_s = memory_s
         self.half = math.radians(fov_deg) / 2
         self.max_range_m = max_range_m
+        self.views = {m: (math.radians(f) / 2, r) for m, (f, r) in (views or {}).items()}
         self.gate_m = gate_m
         self._ids: tuple[str, ...] = ()  # the egos of the last scan (index space of _e)
         self._e = np.zeros(0, dtype=int)  # (M,) ego index (into _ids) of each remembered return
@@ -73,7 +76,8 @@ class Tracker:
             keep = now - self._t <= self.memory_s
             for d in scans:  # should be seen now by this radar: trust its scan
                 r, az, pred = self._polar(d, self._e, now)
-                keep &= ~((np.abs(az) <= self.half) & (r <= self.max_range_m))
+                half, rmax = self.views.get(d.mount, (self.half, self.max_range_m))
+                keep &= ~((np.abs(az) <= half) & (r <= rmax))
             k = np.flatnonzero(keep)
             if len(k) and len(e_new):  # re-observed (a new return of the same ego within gate_m): replaced
                 keep[k[_near_same_ego(pred[k], self._e[k], p_new, e_new, self.gate_m)]] = False
