@@ -20,7 +20,7 @@ import numpy as np
 
 from sumo_avoid.core.drivable import NONE, drivable_line
 from sumo_avoid.core.frenet import RouteFrame
-from sumo_avoid.core.gaps import lane_is_free
+from sumo_avoid.core.gaps import lane_blockers
 from sumo_avoid.core.geometry import wrap_angle
 from sumo_avoid.core.lanes import RouteLanes
 from sumo_avoid.core.polyline import arc_lengths
@@ -37,6 +37,8 @@ LINE_CLEAR_M = 1.0
 YAW_RESERVE = 0.75
 #: A car waiting for a gap to change lanes stops this far before its lane starts to taper off, m.
 LANE_END_CLEAR_M = 1.0
+#: ... and drops back this much below the speed of a car that blocks it from ahead in the lane it needs, m/s.
+DROP_BACK_MPS = 2.0
 #: Window of the ego's own projection around its last arc length, m.
 TRACK_WINDOW_M = 30.0
 
@@ -124,12 +126,15 @@ class RoadView:
             return None
         return self.lanes.centres(s)[1] - self.line.offset(s)[0]
 
-    def lane_change(self, sc: FrenetScene, decel_mps2: float) -> tuple[float, float]:
+    def lane_change(self, sc: FrenetScene, ahead_m: float, decel_mps2: float) -> tuple[float, float]:
         """Where the path changes lanes (an edge entered on a lane that does not lead on along the
-        route), the lateral offset to follow and a speed limit, m/s. (0, inf): follow the path into
-        the next lane towards the route's, which is free beside the ego (:func:`~sumo_avoid.core.gaps.lane_is_free`:
-        the secure gap to whatever it senses behind and ahead in that lane). Otherwise the ego keeps
-        the centre of the lane it is in and, at ``decel_mps2``, stops before that lane tapers off
+        route), the lateral offset to follow (at the carrot, ``ahead_m`` ahead) and a speed limit,
+        m/s. (0, inf): follow the path into the next lane towards the route's, which is free beside
+        the ego (:func:`~sumo_avoid.core.gaps.lane_is_free`: the secure gap to whatever it senses
+        behind and ahead in that lane). Otherwise the ego keeps to the centre of the lane it is in,
+        drops back behind a car in the target lane that blocks it from ahead or alongside
+        (``DROP_BACK_MPS`` below its speed: riding beside it, the gap never opens), and, at
+        ``decel_mps2``, stops before its lane tapers off
         (:meth:`~sumo_avoid.core.lanes.RouteLanes.lanes_end_s`) to wait there for the gap."""
         if self.lanes is None:
             return 0.0, np.inf
@@ -141,12 +146,19 @@ class RoadView:
         if own == piece.lane:
             return 0.0, np.inf
         nxt = own + (1 if piece.lane > own else -1)
-        half = 0.5 * piece.widths_m[nxt]
-        if lane_is_free(sc.s, float(sc.vel[0]), sc.length, sc.o_pos, sc.o_length, sc.o_width, sc.o_vel[:, 0],
-                        (centres[nxt] - half, centres[nxt] + half)):
+        band = (centres[nxt] - 0.5 * piece.widths_m[nxt], centres[nxt] + 0.5 * piece.widths_m[nxt])
+        o_vs = sc.o_vel[:, 0]
+        block = lane_blockers(sc.s, float(sc.vel[0]), sc.length, sc.o_pos, sc.o_length, sc.o_width, o_vs, band)
+        if not block.any():
             return 0.0, np.inf
-        room = self.lanes.lanes_end_s(sc.s) - LANE_END_CLEAR_M - (sc.s + 0.5 * sc.length)
-        return float(centres[own]), float(np.sqrt(2.0 * decel_mps2 * max(room, 0.0)))
+        end = self.lanes.lanes_end_s(sc.s)
+        s_c = min(sc.s + ahead_m, max(end, sc.s))  # the carrot's s, on this edge
+        hold = float(self.lanes.centres(s_c)[1][own] - self.line.offset(s_c)[0])
+        v = float(np.sqrt(2.0 * decel_mps2 * max(end - LANE_END_CLEAR_M - (sc.s + 0.5 * sc.length), 0.0)))
+        ahead = block & (sc.o_pos[:, 0] >= sc.s)  # drop back to open the gap behind it
+        if ahead.any():
+            v = min(v, max(float(o_vs[ahead].min()) - DROP_BACK_MPS, 0.0))
+        return hold, v
 
     def _from_line(self, s, d, rel_heading, vel):
         """Lane-centre frame -> the drivable line's: d, relative heading and velocity (s_dot, d_dot)

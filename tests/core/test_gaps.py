@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sumo_avoid.core.gaps import lane_is_free, secure_gap_m
+from sumo_avoid.core.gaps import lane_blockers, lane_is_free, secure_gap_m
 
 
 def test_secure_gap_by_hand():
@@ -30,3 +30,13 @@ def test_lane_is_free_by_hand():
     # ... the same car in lane 1 (d 0: 0.9 < 1.75 + 0.3) is not in the band -> free
     assert lane_is_free(100.0, 20.0, 4.5, [[90.0, 0.0]], *one, np.array([25.0]), band)
     assert lane_is_free(100.0, 20.0, 4.5, np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0), band)
+
+
+def test_lane_blockers_are_the_vehicles_lane_is_free_counts():
+    # ego at s = 100, 20 m/s: a car ahead 25 m at 20 m/s (room 27.5) blocks, one 30 m ahead does not;
+    # one behind at 50 (25 m/s, room 57.5) blocks; one in the ego's own lane (d 0) does not
+    band = (1.75, 5.25)
+    pos = [[125.0, 3.5], [130.0, 3.5], [50.0, 3.5], [90.0, 0.0]]
+    got = lane_blockers(100.0, 20.0, 4.5, pos, np.full(4, 4.5), np.full(4, 1.8), np.array([20.0, 20.0, 25.0, 25.0]), band)
+    assert got.tolist() == [True, False, True, False]
+    assert lane_blockers(100.0, 20.0, 4.5, np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0), band).shape == (0,)

@@ -242,6 +242,54 @@ def test_rear_radar_sees_behind_not_ahead():
         Radar(RadarParams(), np.random.default_rng(0), mount="roof")
 
 
+def test_side_radars_see_the_car_alongside_that_front_and_rear_radars_cannot():
+    """Car C alongside on the left (centre (0, 3.2), right edge at y = 2.3, x -2.25 .. 2.25) at the
+    ego's speed. The left radar sits mid-flank at (0, 0.9), boresight +y: C's nearest point (0, 2.3)
+    at range 1.4, azimuth 0, radial speed 0. The right radar sees nothing; the front radar (x = 2,
+    +x) sees nothing of C behind its bumper line; the rear one (x = -2, -x) sees only C's last 0.25 m,
+    84 degrees off its boresight (> 45): nothing. Car F at (30, 3.2) is 87 degrees off the left
+    radar's boresight (> 75, the side field of view's half): the front radar's, not the left's."""
+    s = snap([EGO, ("C", 0.0, 3.2, 10.0, 0.0, 4.5, 1.8), ("F", 30.0, 3.2, 10.0, 0.0, 4.5, 1.8)])
+    p = RadarParams(**EXACT, side=True)
+    assert p.mounts() == ("front", "left", "right")
+    left, right, front, rear = (Radar(p, np.random.default_rng(0), mount=m).scan(s, ["ego"])
+                                for m in ("left", "right", "front", "rear"))
+    assert left.mount == "left" and left.target == ("C",)
+    np.testing.assert_allclose(left.sensor_pos, [[0.0, 0.9]], atol=1e-12)
+    assert left.sensor_heading[0] == pytest.approx(math.pi / 2)
+    assert left.range_m[0] == pytest.approx(1.4) and left.azimuth_rad[0] == pytest.approx(0.0, abs=1e-12)
+    assert left.radial_speed_mps[0] == pytest.approx(0.0, abs=1e-12)
+    assert right.n == 0 and rear.n == 0 and front.target == ("F",)
+    # the side radars' own range: C 45 m to the left is beyond side_range_m = 40
+    far = snap([EGO, ("C", 0.0, 45.0, 10.0, 0.0, 4.5, 1.8)])
+    assert Radar(p, np.random.default_rng(0), mount="left").scan(far, ["ego"]).n == 0
+    with pytest.raises(ValueError):
+        RadarParams(side_fov_deg=180.0)
+
+
+def test_tracker_judges_each_mount_by_its_own_field_of_view():
+    """One memory over the front and left radars. A standing car C is seen ahead-left by the front
+    radar (its rear-right corner (17.75, 2.3); the left radar's field of view, 75 degrees off its
+    boresight, passes in front of it); 1 s later the ego (20 m/s) is beside it: from the left radar
+    at (20, 0.9) the remembered point is 58 degrees off the boresight, inside the side
+    field of view (75) though outside the front one's (45). C still there: re-observed, 1 return;
+    C gone: dropped, 0 (judged by the front radar's 45 degrees it would have been kept)."""
+    from sumo_avoid.sensing.tracker import Tracker
+
+    p = RadarParams(**EXACT, side=True, memory_s=5.0)
+    radars = [Radar(p, np.random.default_rng(0), mount=m) for m in ("front", "left")]
+    s0 = snap([("ego", 0.0, 0.0, 20.0, 0.0, 4.0, 1.8), ("C", 20.0, 3.2, 0.0, 0.0, 4.5, 1.8)], t=0.0)
+    ego1 = ("ego", 20.0, 0.0, 20.0, 0.0, 4.0, 1.8)
+    for later, views, kept in ((snap([ego1, ("C", 20.0, 3.2, 0.0, 0.0, 4.5, 1.8)], t=1.0), {"left": (150.0, 40.0)}, 1),
+                               (snap([ego1], t=1.0), {"left": (150.0, 40.0)}, 0),
+                               (snap([ego1], t=1.0), None, 1)):
+        tr = Tracker(5.0, 90.0, 100.0, views=views)
+        first = tr.update(tuple(r.scan(s0, ["ego"], force=True) for r in radars), np.array([0.0]))
+        assert first[0].target == ("C",) and first[1].n == 0
+        out = tr.update(tuple(r.scan(later, ["ego"], force=True) for r in radars), np.array([0.0]))
+        assert out[0].n + out[1].n == kept
+
+
 def test_velocity_estimate_along_the_road_not_the_turning_ego():
     """A car straight ahead-left moving at 13 m/s along +x, seen by an ego turned 0.5 rad left:
     along the ego's heading the estimate is wrong (has a y part); along the road (0 rad) exact."""
@@ -310,7 +358,7 @@ def _random_scene(rng, n_vehicles, n_egos, n_obstacles, dense=False):
     return s, ids[:n_egos], obstacles
 
 
-@pytest.mark.parametrize("mount", ["front", "rear"])
+@pytest.mark.parametrize("mount", ["front", "rear", "left"])
 def test_kernel_is_bit_identical_to_the_numpy_reference(mount):
     """sensors/occlusion.py (numba) against the numpy formulation it replaced (tests/sensing/radar_reference.py):
     the same detections, the same values to the last bit, on 150 random scenes (vehicles of random

@@ -1,0 +1,59 @@
+"""The path's own lane changes wait for a gap (control/road_view.RoadView.lane_change, core/gaps.py)
+in real SUMO, on a two-lane edge whose only connection onwards leaves from the left lane
+(tests/data/lane_change, built here by netconvert): the ego departs in the right lane at 8 m/s, 25 m
+ahead of a car in the left lane at 14 m/s. Krauss's secure gap for that car is 14 x 1 + (14^2 - 8^2)
+/ 9 = 28.7 m, more than the 20.5 m between them: the ego must let it pass and change lanes behind
+it. Before the gate the path blended into the left lane at once: the ego cut in 14.7 m ahead of the
+car, which braked at 9 m/s^2 (SUMO's emergency braking). A front radar alone cannot see that car
+(it does the same); a rear or side radar can."""
+import pathlib
+import shutil
+import subprocess
+
+import pytest
+import sumo
+
+from sumo_avoid import outputs
+from sumo_avoid.rollout import runner
+from sumo_avoid.scenario import spec as scenario
+
+BIN = pathlib.Path(sumo.SUMO_HOME) / "bin"
+DATA = pathlib.Path(__file__).parent.parent / "data" / "lane_change"
+
+
+@pytest.fixture(scope="module")
+def lane_change(tmp_path_factory):
+    d = tmp_path_factory.mktemp("lane_change")
+    for f in ("l.nod.xml", "l.edg.xml", "l.con.xml"):
+        shutil.copy(DATA / f, d / f)
+    subprocess.run([str(BIN / "netconvert"), "-n", str(d / "l.nod.xml"), "-e", str(d / "l.edg.xml"), "-x",
+                    str(d / "l.con.xml"), "--no-turnarounds", "true", "-o", str(d / "l.net.xml")],
+                   check=True, capture_output=True)
+    (d / "l.rou.xml").write_text(
+        '<routes>\n  <vType id="car" length="4.5" width="1.8" accel="2.6" decel="4.5" maxSpeed="14"/>\n'
+        '  <vehicle id="ego" type="car" depart="0" departPos="25" departLane="0" departSpeed="8">'
+        '<route edges="AB BC"/></vehicle>\n'
+        '  <vehicle id="bg" type="car" depart="0" departPos="0" departLane="1" departSpeed="14">'
+        '<route edges="AB BC"/></vehicle>\n</routes>\n')
+    (d / "l.toml").write_text('name = "lane_change"\n[sim]\nnet = "l.net.xml"\nroutes = ["l.rou.xml"]\nstep_s = 0.1\n'
+                              'duration_s = 15.0\nseed = 1\n[ego]\nids = ["ego"]\ncontroller = "apf_sa"\n'
+                              'cruise_speed_mps = 8.0\n')
+    return d
+
+
+@pytest.mark.sumo
+@pytest.mark.parametrize("sensor", [[], ['ego.sensor="radar"', "radar.rear=true"], ['ego.sensor="radar"', "radar.side=true"]],
+                         ids=["truth", "rear_radar", "side_radar"])
+def test_the_ego_lets_the_faster_car_pass_and_changes_lanes_behind_it(lane_change, sensor):
+    res = runner.run(scenario.load(lane_change / "l.toml", sensor))
+    t = res.traj
+    ego, bg = (t[t.id == v].set_index("step") for v in ("ego", "bg"))
+    entered = ego.index[ego.lane == "AB_1"]
+    assert len(entered), "the ego never changed into the lane that leads on"
+    k = entered[0]
+    # the car is ahead when the ego enters its lane, bumper to bumper at least the 3 m the gap keeps
+    assert bg.x[k] - ego.x[k] - 4.5 >= 3.0
+    decel = -(bg.speed.diff() / 0.1)
+    assert decel.max() <= 3.0  # the car never had to brake for the ego (it brakes at 4.5, 9 in emergencies)
+    m = outputs.run_metrics(res)
+    assert m["collisions"] == 0 and m["sumo_collisions"] == 0
