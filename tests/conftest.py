@@ -53,7 +53,7 @@ def cli_in_process(*args, cwd=None) -> CliResult:
 
 
 _STARTS_SUMO = ("runner.run", "run_scenario", "SumoSim", "main([", "run_batch", "run_suite", "subprocess",
-                "sumo_avoid.cli", "_run(", "radar_study", "benchmarks")
+                "sumo_avoid.cli", "radar_study", "benchmarks")
 
 
 def pytest_collection_modifyitems(items):
