@@ -2,9 +2,12 @@
 
 A radar return is one point (the nearest visible point of a target) with a radial speed. A
 controller that expects footprints gets, per detection, an assumed car-sized box
-(``ASSUMED_LENGTH_M`` x ``ASSUMED_WIDTH_M``) aligned with the ego's heading and placed just behind
-the reflection point along the line of sight, moving with the ego's velocity plus the measured
-radial speed explained by motion along the ego's heading (:func:`velocity_estimate`).
+(``ASSUMED_LENGTH_M`` x ``ASSUMED_WIDTH_M``) aligned with the traffic's direction (or the sensor's
+boresight) with the reflection point on its near side: the middle of its rear face for a car
+straight ahead, of its side for a car beside, its corner for a car ahead in the next lane
+(:func:`perceived_boxes`), moving with the ego's velocity plus the measured radial speed explained by
+motion along the ego's heading (:func:`velocity_estimate`). Before, the box was pushed back along the
+line of sight, which for a corner return put it 0.6 m too far into the next lane.
 """
 from __future__ import annotations
 
@@ -14,6 +17,9 @@ from sumo_avoid.core.geometry import footprint_corners, near_any
 
 ASSUMED_LENGTH_M = 4.5
 ASSUMED_WIDTH_M = 1.8
+#: A return this close (m) across (along) the box's axis from the sensor is taken to lie on the
+#: middle of the box's rear (side) face; farther, on its corner; in between, in proportion.
+FACE_M = 1.0
 
 
 def velocity_estimate(det, k=None, along=None) -> np.ndarray:
@@ -55,9 +61,15 @@ def perceived_boxes(det, k=None, along=None, length_m: float = ASSUMED_LENGTH_M,
     u = np.column_stack([np.cos(a), np.sin(a)])
     hd = np.column_stack([np.cos(h), np.sin(h)])
     nd = np.column_stack([-hd[:, 1], hd[:, 0]])
-    depth = 0.5 * length_m * np.abs((u * hd).sum(1)) + 0.5 * width_m * np.abs((u * nd).sum(1))
     point = det.sensor_pos[e] + det.range_m[k][:, None] * u
-    pos = point + depth[:, None] * u
+    # where the return lies on the box: (a, b) = the point from the sensor along / across the box's
+    # axes; a box's nearest point is the middle of its face towards the sensor (b = 0: the box
+    # straight ahead; a = 0: beside) or its corner. The centre is half a length on along, half a
+    # width across, each scaled down over the first FACE_M from the face's foot
+    a = det.range_m[k] * (u * hd).sum(1)
+    b = det.range_m[k] * (u * nd).sum(1)
+    pos = (point + (0.5 * length_m * np.sign(a) * np.minimum(np.abs(a) / FACE_M, 1.0))[:, None] * hd
+           + (0.5 * width_m * np.sign(b) * np.minimum(np.abs(b) / FACE_M, 1.0))[:, None] * nd)
     vel = velocity_estimate(det, k, along)
     return pos, h, np.full(M, length_m), np.full(M, width_m), vel
 

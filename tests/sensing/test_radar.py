@@ -290,6 +290,26 @@ def test_tracker_judges_each_mount_by_its_own_field_of_view():
         assert out[0].n + out[1].n == kept
 
 
+def test_assumed_boxes_have_the_return_on_their_near_side():
+    """Seen from the front radar at (2, 0): car A straight ahead (centre (20, 0)) returns the middle
+    of its rear face (17.75, 0): box centre 2.25 m on, (20, 0). Car B ahead in the next lane (centre
+    (9, 3.5)) returns its rear-right corner (6.75, 2.6): centre 2.25 m on and 0.9 m across, (9, 3.5)
+    exactly (pushed back along the line of sight it was (8.86, 3.76): 0.26 m into the lane beyond).
+    From the left radar at (0, 0.9), car C alongside (centre (0, 3.2)) returns the middle of its side
+    (0, 2.3): centre 0.9 m across, (0, 3.2)."""
+    from sumo_avoid.sensing.perception import perceived_boxes
+
+    s = snap([EGO, ("A", 20.0, 0.0, 10.0, 0.0, 4.5, 1.8), ("B", 9.0, 3.5, 10.0, 0.0, 4.5, 1.8)])
+    det = Radar(RadarParams(**EXACT), np.random.default_rng(0)).scan(s, ["ego"])
+    pos = perceived_boxes(det, along=0.0)[0]
+    got = {t: pos[i] for i, t in enumerate(det.target)}
+    np.testing.assert_allclose(got["A"], [20.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(got["B"], [9.0, 3.5], atol=1e-9)
+    side = snap([EGO, ("C", 0.0, 3.2, 10.0, 0.0, 4.5, 1.8)])
+    det = Radar(RadarParams(**EXACT, side=True), np.random.default_rng(0), mount="left").scan(side, ["ego"])
+    np.testing.assert_allclose(perceived_boxes(det, along=0.0)[0], [[0.0, 3.2]], atol=1e-9)
+
+
 def test_velocity_estimate_along_the_road_not_the_turning_ego():
     """A car straight ahead-left moving at 13 m/s along +x, seen by an ego turned 0.5 rad left:
     along the ego's heading the estimate is wrong (has a y part); along the road (0 rad) exact."""
