@@ -51,3 +51,26 @@ def test_backing_up_counts_as_part_of_the_manoeuvre(ctl):
 def test_an_escape_held_at_its_offset_ends_after_the_hold(ctl):
     # within 1 m of the offset from the start: held for escape_hold_s = 3 s
     assert _run(ctl, _escaping(), [6.5] * 100) == 3.0
+
+
+def _scene_behind(gap_m, v_mps, d_o=0.0):
+    """The ego (4.5 m) at s = 100, d = 0; one car (4.5 x 1.8) behind it, bumper to bumper ``gap_m``,
+    at d_o, driving on at ``v_mps``."""
+    import numpy as np
+
+    from sumo_avoid.control.road_view import FrenetScene
+
+    return FrenetScene(100.0, 0.0, 0.0, np.zeros(2), 4.5, 1.8, np.array([[100.0 - 4.5 - gap_m, d_o]]), np.zeros(1),
+                       np.array([4.5]), np.array([1.8]), np.array([[v_mps, 0.0]]),
+                       lambda s: (np.full(len(s), -5.0), np.full(len(s), 5.0)))
+
+
+def test_backing_up_waits_for_the_traffic_behind(ctl):
+    # a standing car 10 m behind: closing 1.5 m/s (the ego backing), clear beyond 3 + 3 x 1.5 = 7.5 m
+    assert ctl._clear_behind(_scene_behind(10.0, 0.0))
+    assert not ctl._clear_behind(_scene_behind(7.0, 0.0))
+    # the same car driving on at 5 m/s: clear beyond 3 + 3 x 6.5 = 22.5 m
+    assert not ctl._clear_behind(_scene_behind(10.0, 5.0))
+    assert ctl._clear_behind(_scene_behind(23.0, 5.0))
+    # in the next lane (d 3.5: its side at 2.6 > 0.9 + 0.4 from the ego's centre line) it does not count
+    assert ctl._clear_behind(_scene_behind(2.0, 5.0, d_o=3.5))
