@@ -8,6 +8,27 @@ import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "scenarios"
+DATA = pathlib.Path(__file__).resolve().parent / "data"
+
+
+def netconvert(src: str, out_dir: pathlib.Path, name: str, *options: str) -> pathlib.Path:
+    """Build ``out_dir/NAME.net.xml`` with SUMO's netconvert from the plain XML in tests/data/SRC
+    (NAME.nod.xml, NAME.edg.xml and, if there, NAME.con.xml, copied beside it); ``--no-turnarounds``."""
+    import shutil
+    import subprocess
+
+    import sumo
+
+    args = []
+    for kind, flag in (("nod", "-n"), ("edg", "-e"), ("con", "-x")):
+        f = DATA / src / f"{name}.{kind}.xml"
+        if f.exists():
+            shutil.copy(f, out_dir / f.name)
+            args += [flag, str(out_dir / f.name)]
+    net = out_dir / f"{name}.net.xml"
+    subprocess.run([str(pathlib.Path(sumo.SUMO_HOME) / "bin" / "netconvert"), *args, "--no-turnarounds", "true",
+                    *options, "-o", str(net)], check=True, capture_output=True)
+    return net
 
 
 @pytest.fixture

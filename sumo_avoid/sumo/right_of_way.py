@@ -14,12 +14,21 @@ along the way (SUMO lane lengths, so that SUMO's lane position gives the distanc
 F's internal lanes up to the conflict, F's incoming lane, and the lanes upstream of it (internal
 lanes of the junctions before included, so a roundabout's ring is followed back through its
 junctions) up to ``horizon_m`` before F's stop line.
+
+An *unregulated* junction has no junction logic (SUMO's drivers go through without looking; SUMO
+checks no collisions there): every link from another edge whose chain crosses the ego's, or ends
+in the same lane, is a foe, and the ego's link counts as equal ('=', :func:`link_state`): it gives
+way to all of them (on a netgenerate spider net, where the centre is unregulated, the ego drove
+into a car crossing it).
 """
 from __future__ import annotations
 
 from shapely.geometry import LineString, Point
 
 from sumo_avoid.core.types import FoeLink
+
+#: SUMO's junction type without right of way (netgenerate leaves e.g. a spider net's centre so).
+UNREGULATED = "unregulated"
 
 
 class RightOfWay:
@@ -43,29 +52,36 @@ class RightOfWay:
         return out
 
     def foes(self, conn) -> tuple[FoeLink, ...]:
-        """The links with priority over ``conn`` (a sumolib connection between normal lanes)."""
+        """The links with priority over ``conn`` (a sumolib connection between normal lanes); at an
+        unregulated junction every link from another edge that crosses or merges with it."""
         node = conn.getFrom().getToNode()
+        mine = self.via_chain(conn)
+        if node.getType() == UNREGULATED:
+            line, target = _chain_line(mine), conn.getToLane().getID()
+            others = [o for o in node.getConnections() if o.getFrom() is not conn.getFrom()
+                      and not o.getFromLane().getID().startswith(":")]
+            return tuple(self._foe(o, mine) for o in others
+                         if o.getToLane().getID() == target or _crosses(_chain_line(self.via_chain(o)), line))
         if not getattr(node, "_prohibits", None):
             return ()
-        mine = self.via_chain(conn)
-        out = []
-        for other in node.getConnections():
-            if other is conn or other.getFromLane().getID().startswith(":") or not node.forbids(other, conn):
-                continue
-            chain = self.via_chain(other)
-            approach: dict[str, float] = {}
-            conflict = _conflict_offset(chain, mine)
-            acc = 0.0
-            for ln in chain:  # internal lanes up to the conflict point
-                if acc > conflict:
-                    break
-                approach[ln.getID()] = conflict - acc
-                acc += ln.getLength()
-            self._upstream(other.getFromLane(), conflict + other.getFromLane().getLength(), approach)
-            tls = other.getTLSID() or ""
-            out.append(FoeLink(tls, int(other.getTLLinkIndex()) if tls else -1, other.getState() or "",
-                               other.getDirection() or "", tuple(sorted(approach.items())), float(conflict)))
-        return tuple(out)
+        return tuple(self._foe(other, mine) for other in node.getConnections()
+                     if other is not conn and not other.getFromLane().getID().startswith(":") and node.forbids(other, conn))
+
+    def _foe(self, other, mine) -> FoeLink:
+        """``other`` as a foe of the link whose internal lanes are ``mine``."""
+        chain = self.via_chain(other)
+        approach: dict[str, float] = {}
+        conflict = _conflict_offset(chain, mine)
+        acc = 0.0
+        for ln in chain:  # internal lanes up to the conflict point
+            if acc > conflict:
+                break
+            approach[ln.getID()] = conflict - acc
+            acc += ln.getLength()
+        self._upstream(other.getFromLane(), conflict + other.getFromLane().getLength(), approach)
+        tls = other.getTLSID() or ""
+        return FoeLink(tls, int(other.getTLLinkIndex()) if tls else -1, other.getState() or "",
+                       other.getDirection() or "", tuple(sorted(approach.items())), float(conflict))
 
     def _upstream(self, lane, offset_m: float, out: dict) -> None:
         """Add ``lane`` (conflict ``offset_m`` from its start) and the lanes feeding it, back to
@@ -90,6 +106,18 @@ class RightOfWay:
                     if out.get(v.getID(), float("inf")) > acc:
                         out[v.getID()] = acc
                 todo.append((src, acc + src.getLength()))
+
+
+def link_state(conn) -> str:
+    """The right of way of a connection for the ego: the net's state ('M', 'm', '=', ...), except at
+    an unregulated junction, where SUMO gives every link 'M' and nobody yields (its drivers go
+    through; it checks no collisions there): '=', the ego gives way to every crossing link
+    (:meth:`RightOfWay.foes`)."""
+    return "=" if conn.getFrom().getToNode().getType() == UNREGULATED else (conn.getState() or "")
+
+
+def _crosses(a: LineString | None, b: LineString | None) -> bool:
+    return a is not None and b is not None and a.intersects(b)
 
 
 def _chain_line(lanes) -> LineString | None:

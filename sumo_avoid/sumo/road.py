@@ -32,7 +32,7 @@ from sumo_avoid.core.polyline import (
 )
 from sumo_avoid.core.types import LanePiece, RouteLink
 from sumo_avoid.sumo.lanes import LaneIndex
-from sumo_avoid.sumo.right_of_way import RightOfWay
+from sumo_avoid.sumo.right_of_way import RightOfWay, link_state
 
 
 class RoutePlan(NamedTuple):
@@ -312,7 +312,7 @@ class Road:
     def _link(self, conn, s_stop_m: float) -> RouteLink:
         tls = conn.getTLSID() or ""
         return RouteLink(float(s_stop_m), conn.getFrom().getToNode().getID(), tls,
-                         int(conn.getTLLinkIndex()) if tls else -1, conn.getState() or "", conn.getDirection() or "",
+                         int(conn.getTLLinkIndex()) if tls else -1, link_state(conn), conn.getDirection() or "",
                          self.right_of_way.foes(conn), self._oncoming(conn.getTo()),
                          tuple(lane for lane, *_ in self._oncoming(conn.getFrom())))
 

@@ -6,29 +6,18 @@ ahead of a car in the left lane at 14 m/s. Krauss's secure gap for that car is 1
 it. Before the gate the path blended into the left lane at once: the ego cut in 14.7 m ahead of the
 car, which braked at 9 m/s^2 (SUMO's emergency braking). A front radar alone cannot see that car
 (it does the same); a rear or side radar can."""
-import pathlib
-import shutil
-import subprocess
-
 import pytest
-import sumo
+from conftest import netconvert
 
 from sumo_avoid import outputs
 from sumo_avoid.rollout import runner
 from sumo_avoid.scenario import spec as scenario
 
-BIN = pathlib.Path(sumo.SUMO_HOME) / "bin"
-DATA = pathlib.Path(__file__).parent.parent / "data" / "lane_change"
-
 
 @pytest.fixture(scope="module")
 def lane_change(tmp_path_factory):
     d = tmp_path_factory.mktemp("lane_change")
-    for f in ("l.nod.xml", "l.edg.xml", "l.con.xml"):
-        shutil.copy(DATA / f, d / f)
-    subprocess.run([str(BIN / "netconvert"), "-n", str(d / "l.nod.xml"), "-e", str(d / "l.edg.xml"), "-x",
-                    str(d / "l.con.xml"), "--no-turnarounds", "true", "-o", str(d / "l.net.xml")],
-                   check=True, capture_output=True)
+    netconvert("lane_change", d, "l")
     (d / "l.rou.xml").write_text(
         '<routes>\n  <vType id="car" length="4.5" width="1.8" accel="2.6" decel="4.5" maxSpeed="14"/>\n'
         '  <vehicle id="ego" type="car" depart="0" departPos="25" departLane="0" departSpeed="8">'

@@ -7,29 +7,19 @@
 * grid08 of the generated suite (netgenerate, all-way stops, randomTrips traffic), seed 2: with a
   constant-speed arrival for a car standing at its line the ego crossed together with a car SUMO
   let go, and the footprints touched in junction A1; first come, first served passes."""
-import pathlib
-import shutil
-import subprocess
 
 import pytest
-import sumo
-from conftest import run_scenario
+from conftest import netconvert, run_scenario
 
 from sumo_avoid import outputs
 from sumo_avoid.rollout import runner
 from sumo_avoid.scenario import spec as scenario
 
-BIN = pathlib.Path(sumo.SUMO_HOME) / "bin"
-DATA = pathlib.Path(__file__).parent.parent / "data" / "tight_turn"
-
 
 @pytest.fixture(scope="module")
 def tight_turn(tmp_path_factory):
     d = tmp_path_factory.mktemp("tight")
-    for f in ("t.nod.xml", "t.edg.xml"):
-        shutil.copy(DATA / f, d / f)
-    subprocess.run([str(BIN / "netconvert"), "-n", str(d / "t.nod.xml"), "-e", str(d / "t.edg.xml"), "--no-turnarounds",
-                    "true", "--default.junctions.radius", "2", "-o", str(d / "t.net.xml")], check=True, capture_output=True)
+    netconvert("tight_turn", d, "t", "--default.junctions.radius", "2")
     (d / "t.rou.xml").write_text(
         '<routes>\n  <vType id="car" length="5" width="1.8" accel="2.6" decel="4.5" maxSpeed="20"/>\n'
         '  <vehicle id="ego" type="car" depart="0" departPos="20" departSpeed="10"><route edges="AB BC"/></vehicle>\n'
