@@ -299,7 +299,8 @@ class ApfController:
         for k, (vid, row) in enumerate(zip(obs.ego_ids, obs.ego_rows)):
             task, view = self.tasks[vid], self.views[vid]
             sc = self.scene(obs, row, vid)
-            offset, v_lane = view.lane_change(sc, self.lookahead(float(np.hypot(*sc.vel))), self.p.gov_decel_mps2)  # the path's lane changes wait for a gap
+            offset, v_lane = view.lane_change(sc, self.lookahead(float(np.hypot(*sc.vel))), self.p.gov_decel_mps2,
+                                            self.step_s)  # the path's lane changes wait for a gap
             fld = self.field(sc, sc.q[None, :], self.carrot(view, sc, offset))
             self.last_force[vid] = float(np.hypot(*fld.F[0]))
             v = self.velocity(fld, task.cruise_speed_mps, min(self.road_speed(view, sc), v_lane))

@@ -117,7 +117,7 @@ class ApfSaController(ApfController):
             st.history.append((t, sc.s))
             while st.history and st.history[0][0] < t - p.trap_window_s - 1e-9:
                 st.history.popleft()
-            offset, v_lane = view.lane_change(sc, self.lookahead(speed), p.gov_decel_mps2)  # the path's lane changes wait for a gap
+            offset, v_lane = view.lane_change(sc, self.lookahead(speed), p.gov_decel_mps2, self.step_s)  # the path's lane changes wait for a gap
             if st.escape_offset is not None:
                 offset, v_lane = st.escape_offset, np.inf
             target = self.carrot(view, sc, offset)

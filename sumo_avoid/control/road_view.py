@@ -20,7 +20,7 @@ import numpy as np
 
 from sumo_avoid.core.drivable import NONE, drivable_line
 from sumo_avoid.core.frenet import RouteFrame
-from sumo_avoid.core.gaps import lane_blockers
+from sumo_avoid.core.gaps import GAP_MIN_M, lane_blockers
 from sumo_avoid.core.geometry import wrap_angle
 from sumo_avoid.core.lanes import RouteLanes
 from sumo_avoid.core.polyline import arc_lengths
@@ -37,8 +37,17 @@ LINE_CLEAR_M = 1.0
 YAW_RESERVE = 0.75
 #: A car waiting for a gap to change lanes stops this far before its lane starts to taper off, m.
 LANE_END_CLEAR_M = 1.0
-#: ... and drops back this much below the speed of a car that blocks it from ahead in the lane it needs, m/s.
+#: ... and drops back this much below the speed of a car that blocks it from ahead in the lane it needs, m/s;
 DROP_BACK_MPS = 2.0
+#: ... it goes once that lane has been free this long, s; a change is under way once the ego is this far
+#: from its lane's centre towards the next, m.
+LANE_FREE_S = 1.0
+COMMIT_M = 0.5
+#: Changes are held only where the lane the ego needs runs straighter than this radius where the
+#: lane it is in tapers off, m. On a roundabout's ring (R ~ 31 m, edges of ~25 m between arms)
+#: holding the inner lane while braking for ring cars swung the car 0.2 m over the kerb (roundabout2
+#: seeds 4, 5); there the path blends across as before and the field keeps it off the ring's cars.
+HOLD_RADIUS_M = 100.0
 #: Window of the ego's own projection around its last arc length, m.
 TRACK_WINDOW_M = 30.0
 
@@ -94,6 +103,7 @@ class RoadView:
         gs, gd = self.frame.to_frenet(np.asarray(task.goal, float)[None, :])
         self.goal = np.array([gs[0], gd[0] - self.line.offset(gs)[0]])
         self._s: float | None = None
+        self._held_free_s: float | None = None  # a held lane change: how long its lane has been free, s
 
     @property
     def length_m(self) -> float:
@@ -126,36 +136,58 @@ class RoadView:
             return None
         return self.lanes.centres(s)[1] - self.line.offset(s)[0]
 
-    def lane_change(self, sc: FrenetScene, ahead_m: float, decel_mps2: float) -> tuple[float, float]:
+    def lane_change(self, sc: FrenetScene, ahead_m: float, decel_mps2: float, step_s: float) -> tuple[float, float]:
         """Where the path changes lanes (an edge entered on a lane that does not lead on along the
         route), the lateral offset to follow (at the carrot, ``ahead_m`` ahead) and a speed limit,
-        m/s. (0, inf): follow the path into the next lane towards the route's, which is free beside
-        the ego (:func:`~sumo_avoid.core.gaps.lane_is_free`: the secure gap to whatever it senses
-        behind and ahead in that lane). Otherwise the ego keeps to the centre of the lane it is in,
-        drops back behind a car in the target lane that blocks it from ahead or alongside
-        (``DROP_BACK_MPS`` below its speed: riding beside it, the gap never opens), and, at
-        ``decel_mps2``, stops before its lane tapers off
-        (:meth:`~sumo_avoid.core.lanes.RouteLanes.lanes_end_s`) to wait there for the gap."""
+        m/s, called once per step (``step_s``). (0, inf): follow the path into the next lane towards
+        the route's, which is free beside the ego (:func:`~sumo_avoid.core.gaps.lane_blockers`: the
+        secure gap to whatever it senses behind and ahead in that lane). Otherwise the ego keeps to
+        the centre of the lane it is in, drops back behind a car in the target lane that blocks it
+        from ahead or alongside (``DROP_BACK_MPS`` below its speed: riding beside it, the gap never
+        opens), and, at ``decel_mps2``, stops before its lane tapers off
+        (:meth:`~sumo_avoid.core.lanes.RouteLanes.lanes_end_s`) to wait there for the gap. A held
+        change goes once the lane has been free for ``LANE_FREE_S`` (on a two-lane roundabout the
+        hold flipped on and off as ring cars came and went); one under way (the ego ``COMMIT_M``
+        towards the lane) is carried through unless a car is alongside in it. In a bend tighter than
+        ``HOLD_RADIUS_M`` the path's blend is followed as it is."""
         if self.lanes is None:
             return 0.0, np.inf
         piece, centres = self.lanes.centres(sc.s)
         if len(centres) < 2 or piece.edge.startswith(":"):
+            self._held_free_s = None
             return 0.0, np.inf
         centres = centres - self.line.offset(sc.s)[0]
         own = int(np.argmin(np.abs(centres - sc.d)))
         if own == piece.lane:
+            self._held_free_s = None
             return 0.0, np.inf
-        nxt = own + (1 if piece.lane > own else -1)
+        end = self.lanes.lanes_end_s(sc.s)
+        if np.abs(self.frame.curvature_at(np.linspace(end - 5.0, end, 6))).max() > 1.0 / HOLD_RADIUS_M:
+            self._held_free_s = None  # in a bend (a roundabout's ring): the path's own blend, as before
+            return 0.0, np.inf
+        step = 1 if piece.lane > own else -1
+        nxt = own + step
         band = (centres[nxt] - 0.5 * piece.widths_m[nxt], centres[nxt] + 0.5 * piece.widths_m[nxt])
         o_vs = sc.o_vel[:, 0]
         block = lane_blockers(sc.s, float(sc.vel[0]), sc.length, sc.o_pos, sc.o_length, sc.o_width, o_vs, band)
-        if not block.any():
+        ds = sc.o_pos[:, 0] - sc.s
+        alongside = block & (np.abs(ds) < 0.5 * (sc.length + sc.o_length) + GAP_MIN_M)
+        held = self._held_free_s is not None
+        if block.any():
+            if not held and step * (sc.d - centres[own]) > COMMIT_M and not alongside.any():
+                return 0.0, np.inf  # under way: carry it through
+            self._held_free_s = 0.0
+        elif not held:
             return 0.0, np.inf
-        end = self.lanes.lanes_end_s(sc.s)
+        else:
+            self._held_free_s += step_s
+            if self._held_free_s >= LANE_FREE_S - 1e-9:
+                self._held_free_s = None
+                return 0.0, np.inf
         s_c = min(sc.s + ahead_m, max(end, sc.s))  # the carrot's s, on this edge
         hold = float(self.lanes.centres(s_c)[1][own] - self.line.offset(s_c)[0])
         v = float(np.sqrt(2.0 * decel_mps2 * max(end - LANE_END_CLEAR_M - (sc.s + 0.5 * sc.length), 0.0)))
-        ahead = block & (sc.o_pos[:, 0] >= sc.s)  # drop back to open the gap behind it
+        ahead = block & (ds >= 0.0)  # drop back to open the gap behind it
         if ahead.any():
             v = min(v, max(float(o_vs[ahead].min()) - DROP_BACK_MPS, 0.0))
         return hold, v
