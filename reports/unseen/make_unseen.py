@@ -6,6 +6,7 @@ Usage:  python reports/unseen/make_unseen.py OUT_DIR
 then    sumo-avoid batch OUT_DIR/*/scenario.toml --seeds 1-2 --workers 2 --ledger OUT_DIR/truth.sqlite
         (and the same with --set ego.sensor=radar)
 """
+import argparse
 import pathlib
 import sys
 
@@ -22,8 +23,20 @@ NETS = {  # the number is netgenerate's and randomTrips.py's seed
     "spider36": make._spider(6, 3, 60, 2) + make.TLS,
 }
 
-if __name__ == "__main__":
-    out = pathlib.Path(sys.argv[1])
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description="build the six unseen nets into OUT_DIR")
+    ap.add_argument("out", type=pathlib.Path, metavar="OUT_DIR")
+    out = ap.parse_args(argv).out  # a missing OUT_DIR: argparse's one line, exit 2
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:  # bad input: one line, exit 2, nothing written
+        print(f"make_unseen: error: OUT_DIR {out}: {e.strerror}", file=sys.stderr)
+        return 2
     make.NETS.update(NETS)
     for name in NETS:
         print(name, make.build_one(name, out))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

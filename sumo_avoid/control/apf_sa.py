@@ -91,7 +91,6 @@ class ApfSaController(ApfController):
         self.state: dict[str, _EgoState] = {}
         self.escapes = 0
         self.failed_searches = 0
-        self._sees_behind = True  # this step's observation has a view behind the egos (set in act)
 
     def add_ego(self, task: EgoTask) -> None:
         super().add_ego(task)
@@ -111,7 +110,7 @@ class ApfSaController(ApfController):
         t = obs.snapshot.time_s
         # backing up needs a view behind: ground truth, or a rear radar (a front radar alone backed the
         # ego into the cars behind it on an unseen netgenerate grid, 12 collisions on 2 seeds)
-        self._sees_behind = obs.detections is None or any(d.mount == "rear" for d in obs.detections)
+        sees_behind = obs.detections is None or any(d.mount == "rear" for d in obs.detections)
         for k, (vid, row) in enumerate(zip(obs.ego_ids, obs.ego_rows)):
             task, st, view = self.tasks[vid], self.state[vid], self.views[vid]
             sc = self.scene(obs, row, vid)
@@ -153,7 +152,7 @@ class ApfSaController(ApfController):
                     fld = self.field(sc, sc.q[None, :], target)
             v = self.velocity(fld, task.cruise_speed_mps, v_road)
             if st.escape_offset is not None:
-                v = self._make_room(st, sc, v, fld.v_safe, target)
+                v = self._make_room(st, sc, v, fld.v_safe, sees_behind)
             out[k] = view.to_xy_velocity(sc.s, sc.d, v, self.step_s)
         return out
 
@@ -183,7 +182,7 @@ class ApfSaController(ApfController):
                 return o
         return 0.0
 
-    def _make_room(self, st: _EgoState, sc: FrenetScene, v_des, v_safe: float, target):
+    def _make_room(self, st: _EgoState, sc: FrenetScene, v_des, v_safe: float, sees_behind: bool):
         """A car cannot step sideways: when the escape is blocked straight ahead (the governor allows
         no speed) it backs up until ``escape_room_m`` is free on the line towards the escape
         target, then drives the escape forward. Needs ``actuator.max_reverse_speed_mps > 0``."""
@@ -194,7 +193,7 @@ class ApfSaController(ApfController):
             if room >= max(self.p.escape_room_m, self.lookahead(0.0)):
                 st.reversing = False
                 return v_des
-            if not (self._sees_behind and self._clear_behind(sc)):  # never back into traffic, nor blind
+            if not (sees_behind and self._clear_behind(sc)):  # never back into traffic, nor blind
                 return np.zeros(2)
             # back up against the route direction, so the nose straightens while the lateral
             # offset already won is kept (a three-point manoeuvre rather than undoing the turn)
@@ -203,18 +202,23 @@ class ApfSaController(ApfController):
             return self.p.escape_reverse_speed_mps * back
         return v_des
 
+    def _strip(self, sc: FrenetScene, pos, heading: float):
+        """The other vehicles against a strip of half width W/2 + ``gov_margin_m`` through ``pos``
+        (s, d) along ``heading``: their corners' positions along it (O, 4), m, and which of them
+        reach into it across (O,)."""
+        hd = np.array([math.cos(heading), math.sin(heading)])
+        rel = footprint_corners(sc.o_pos, sc.o_heading, sc.o_length, sc.o_width) - pos
+        x, y = rel @ hd, rel @ np.array([-hd[1], hd[0]])
+        half = 0.5 * sc.width + self.p.gov_margin_m
+        return x, (y.max(axis=1) >= -half) & (y.min(axis=1) <= half)
+
     def _room_ahead(self, sc: FrenetScene, at=None, heading=None) -> float:
         """Free length ahead of the ego's footprint (placed at ``at`` with ``heading``, in (s, d)), m."""
         if not len(sc.o_pos):
             return math.inf
-        h = sc.heading if heading is None else heading
-        pos = sc.q if at is None else np.asarray(at, float)
-        hd = np.array([math.cos(h), math.sin(h)])
-        oc = footprint_corners(sc.o_pos, sc.o_heading, sc.o_length, sc.o_width)
-        rel = oc - pos
-        x, y = rel @ hd, rel @ np.array([-hd[1], hd[0]])
-        half = 0.5 * sc.width + self.p.gov_margin_m
-        ahead = (y.max(axis=1) >= -half) & (y.min(axis=1) <= half) & (x.max(axis=1) > 0)
+        x, in_strip = self._strip(sc, sc.q if at is None else np.asarray(at, float),
+                                  sc.heading if heading is None else heading)
+        ahead = in_strip & (x.max(axis=1) > 0)
         if not ahead.any():
             return math.inf
         return float(max(x[ahead].min(), 0.0) - 0.5 * sc.length)
@@ -227,11 +231,9 @@ class ApfSaController(ApfController):
         backed up 50 m of a three-lane road into the cars queueing behind it, 8 collisions)."""
         if not len(sc.o_pos):
             return True
-        oc = footprint_corners(sc.o_pos, sc.o_heading, sc.o_length, sc.o_width)
-        half = 0.5 * sc.width + self.p.gov_margin_m
-        in_strip = (oc[..., 1].max(axis=1) >= sc.d - half) & (oc[..., 1].min(axis=1) <= sc.d + half)
-        gap = (sc.s - 0.5 * sc.length) - oc[..., 0].max(axis=1)
-        behind = in_strip & (oc[..., 0].min(axis=1) < sc.s)
+        x, in_strip = self._strip(sc, sc.q, 0.0)
+        behind = in_strip & (x.min(axis=1) < 0.0)
+        gap = -x.max(axis=1) - 0.5 * sc.length
         closing = np.maximum(sc.o_vel[:, 0], 0.0) + self.p.escape_reverse_speed_mps
         return not (behind & (gap < self.p.reverse_clear_m + self.p.reverse_clear_s * closing)).any()
 

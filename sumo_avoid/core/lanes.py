@@ -37,6 +37,7 @@ class RouteLanes:
         if not pieces:
             raise ValueError("a path needs at least one lane piece")
         self.pieces = tuple(pieces)
+        self._starts = np.array([p.s_start_m for p in self.pieces])
         pts: list[tuple[float, float, float]] = []  # (s, d_lo, d_hi) breakpoints in order of s
         n = len(pieces)
         for k, p in enumerate(pieces):
@@ -74,7 +75,7 @@ class RouteLanes:
         """Arc length where the lanes of the edge at s that do not continue the route start to taper
         off (the corridor's taper, see the module doc), or where the edge ends if nothing follows it:
         a car in such a lane must be out of it, or stopped, by then."""
-        k = self.pieces.index(self.centres(s)[0])
+        k = self._index(s)
         while k + 1 < len(self.pieces) and self.pieces[k + 1].edge == self.pieces[k].edge:
             k += 1
         p = self.pieces[k]
@@ -91,10 +92,13 @@ class RouteLanes:
         p, centres = self.centres(s)
         return p.edge, int(np.argmin(np.abs(centres - d)))
 
+    def _index(self, s: float) -> int:
+        """Index of the piece at arc length s."""
+        return max(0, min(int(np.searchsorted(self._starts, s, side="right")) - 1, len(self.pieces) - 1))
+
     def centres(self, s: float) -> tuple[LanePiece, np.ndarray]:
         """(the piece at arc length s, d of every lane centre of its edge there (by lane index), m)."""
-        starts = [p.s_start_m for p in self.pieces]
-        p = self.pieces[max(0, min(int(np.searchsorted(starts, s, side="right")) - 1, len(self.pieces) - 1))]
+        p = self.pieces[self._index(s)]
         f = 0.0 if p.s_end_m - p.s_start_m <= _EPS else min(max((s - p.s_start_m) / (p.s_end_m - p.s_start_m), 0.0), 1.0)
         return p, (1.0 - f) * np.asarray(p.offsets_start_m) + f * np.asarray(p.offsets_end_m)
 

@@ -136,7 +136,6 @@ class Radar:
     def __init__(self, params: RadarParams, rng: np.random.Generator, mount: str = "front"):
         if mount not in MOUNTS:
             raise ValueError(f"radar mount must be one of {MOUNTS}")
-        self.params = params  # as given (the tracker's views of every mount)
         fov, rng_m = params.view(mount)
         # this mount's own field of view and range (a side radar's differ from the front's)
         self.p = params if mount not in SIDES else replace(params, fov_deg=fov, max_range_m=rng_m)
@@ -146,8 +145,10 @@ class Radar:
         self.log: list[Detections] = []
         occlusion.warm()  # load the compiled kernel now, with the set-up, not inside the first step
         self._scan, self._candidates = occlusion.scan, occlusion.candidates
+        # the front radar keeps the one memory of every mount (each judged by its own view)
         views = {m: params.view(m) for m in params.mounts()}
-        self.tracker = Tracker(params.memory_s, params.fov_deg, params.max_range_m, views=views) if params.memory_s > 0 else None
+        self.tracker = (Tracker(params.memory_s, params.fov_deg, params.max_range_m, views=views)
+                        if params.memory_s > 0 and mount == "front" else None)
 
     def objects(self, det, along=None):
         """What controllers get: the scan plus remembered returns now out of view (sensors.tracker).

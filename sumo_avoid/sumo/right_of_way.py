@@ -58,18 +58,17 @@ class RightOfWay:
         mine = self.via_chain(conn)
         if node.getType() == UNREGULATED:
             line, target = _chain_line(mine), conn.getToLane().getID()
-            others = [o for o in node.getConnections() if o.getFrom() is not conn.getFrom()
-                      and not o.getFromLane().getID().startswith(":")]
-            return tuple(self._foe(o, mine) for o in others
-                         if o.getToLane().getID() == target or _crosses(_chain_line(self.via_chain(o)), line))
+            others = ((o, self.via_chain(o)) for o in node.getConnections() if o.getFrom() is not conn.getFrom()
+                      and not o.getFromLane().getID().startswith(":"))
+            return tuple(self._foe(o, chain, mine) for o, chain in others
+                         if o.getToLane().getID() == target or _crosses(_chain_line(chain), line))
         if not getattr(node, "_prohibits", None):
             return ()
-        return tuple(self._foe(other, mine) for other in node.getConnections()
+        return tuple(self._foe(other, self.via_chain(other), mine) for other in node.getConnections()
                      if other is not conn and not other.getFromLane().getID().startswith(":") and node.forbids(other, conn))
 
-    def _foe(self, other, mine) -> FoeLink:
-        """``other`` as a foe of the link whose internal lanes are ``mine``."""
-        chain = self.via_chain(other)
+    def _foe(self, other, chain, mine) -> FoeLink:
+        """``other`` (its internal lanes ``chain``) as a foe of the link whose internal lanes are ``mine``."""
         approach: dict[str, float] = {}
         conflict = _conflict_offset(chain, mine)
         acc = 0.0
