@@ -42,8 +42,9 @@ class RouteLink:
     foes: tuple[FoeLink, ...] = ()  # links with priority over this one (sumo.right_of_way)
     # the lane of each edge running opposite to the link's exit edge (into this junction) that borders
     # it: (SUMO lane id, lane length m, side: +1 left, -1 right, the internal lanes its connections run
-    # over); traffic there meets a car whose turn swings wide at the exit (safety.wide_turns)
-    oncoming: tuple[tuple[str, float, int, tuple[str, ...]], ...] = ()
+    # over, whether one of its links gives way to this one); traffic there meets a car whose turn swings
+    # wide at the exit (safety.wide_turns)
+    oncoming: tuple[tuple[str, float, int, tuple[str, ...], bool], ...] = ()
     leaving: tuple[str, ...] = ()  # the lane bordering the entry edge on each edge leaving the junction the other way
 
 

@@ -17,10 +17,13 @@ when its front is at s_clear = s_w + L. An oncoming vehicle x metres before the 
 speed v arrives in max(x, 0) / max(v, 1 m/s) (:func:`~sumo_avoid.safety.yielding.arrival_time`;
 past that point it is in the ego's sweep until it has left its lane: rand08 seed 4, a car braking
 to the end of that lane was hit when counted only until its rear had passed the point). A car that
-*stands* past the point waits for the junction, SUMO's right of way often for the ego itself: waiting
-for it deadlocked both (rand08 seed 4, 90 s); it is not waited for, and the ego's road view keeps it
-an obstacle to steer clear of (control/road_view.py: a vehicle within the room of the drivable line
-is in the scene). The ego,
+*stands* past the point waits for the junction. Where one of its lane's links gives way to the
+ego's (SUMO's junction logic), it may be waiting for the ego itself: waiting for it deadlocked both
+(rand08 seed 4, 90 s); it is not waited for, and the ego's road view keeps it an obstacle to steer
+clear of (control/road_view.py: a vehicle within the room of the drivable line is in the scene).
+Where none gives way to the ego's link, it waits for others and stays in the sweep: the ego waits
+too (rand08 seed 4: entering beside such a car, the ego stood 27 s inside the turn 0.8 m from its
+nose, and four cars queueing behind the ego ran into it). The ego,
 its front at s, clears in (s_clear - s) / ``TURN_CRAWL_MPS``, the speed it makes such turns at
 (rand08: it crosses the line at 3.2 m/s and slows to 2.1 m/s at the apex; it took 6 s from the line
 to s_w, 14 m). Before its stop line the ego is held while an oncoming vehicle arrives before it has
@@ -62,7 +65,8 @@ class WideExit:
     """Where a turn's drivable line sweeps into the oncoming lane of its exit edge."""
 
     s_clear_m: float  # arc length on the ego's path where its front is when the sweep has ended, m
-    conflicts: tuple[tuple[str, float], ...]  # (oncoming lane id, offset of the conflict point on it), m
+    # (oncoming lane id, offset of the conflict point on it m, whether a car there may wait for the ego)
+    conflicts: tuple[tuple[str, float, bool], ...]
     inside: tuple[str, ...] = ()  # the junction's internal lanes the oncoming lanes lead over
     leaving: tuple[str, ...] = ()  # the lanes leaving the junction beside the ego's entry
 
@@ -88,12 +92,12 @@ def wide_exits(task: EgoTask, turn_radius_m: float) -> dict[int, WideExit]:
         lo, hi = lanes.corridor(s)
         bent = np.abs(off) > 1e-9
         conflicts, ends, inside = [], [], []
-        for lane, length, side, via in link.oncoming:
+        for lane, length, side, via, waits in link.oncoming:
             over = bent & ((off + reach > hi) if side > 0 else (off - reach < lo))
             if over.any():
                 end = float(s[np.flatnonzero(over)[-1]]) + STEP_M
                 ends.append(end)
-                conflicts.append((lane, length - max(end + 0.5 * task.length_m - s_exit, 0.0)))
+                conflicts.append((lane, length - max(end + 0.5 * task.length_m - s_exit, 0.0), waits))
                 inside += via
         if conflicts:
             out[k] = WideExit(max(ends) + task.length_m, tuple(conflicts), tuple(inside), link.leaving)
@@ -109,11 +113,11 @@ def oncoming_first(wide: WideExit, s_front_m: float, lanes: dict[str, list[int]]
             float(lane_pos[r]) < LEAVING_CLEAR_M for lane in wide.leaving for r in lanes.get(lane, ())):
         return -np.inf  # a car still crossing the junction or just out of it beside the ego's wide entry
     first = np.inf
-    for lane, offset in wide.conflicts:
+    for lane, offset, waits in wide.conflicts:
         for r in lanes.get(lane, ()):
             # past the conflict point it is in the ego's sweep until it has left its lane (then ``inside``),
-            # unless it stands there: it waits for the junction, likely for the ego (RoadView keeps it an obstacle)
+            # unless it stands there and may wait for the ego (RoadView keeps it an obstacle)
             x, v = offset - float(lane_pos[r]), float(speed[r])
-            if x > 0.0 or v >= STAND_MPS:
+            if x > 0.0 or v >= STAND_MPS or not waits:
                 first = min(first, arrival_time(x, v))
     return first - t_clear

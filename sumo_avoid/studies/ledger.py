@@ -43,6 +43,8 @@ FIXED = {  # column -> SQL type; metric columns are added after these
     "code": "TEXT",  # code_version() of the plug-in that made the row
 }
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+#: The suffixes :func:`export` writes beside a ledger: a ledger named so would be overwritten by its export.
+EXPORT_SUFFIXES = (".csv", ".parquet")
 
 
 def check(path, flag: str = "--ledger", new_ok: bool = True) -> None:
@@ -50,6 +52,9 @@ def check(path, flag: str = "--ledger", new_ok: bool = True) -> None:
     another kind, not a SQLite database of something else. Raises ScenarioError naming ``flag``."""
     path = pathlib.Path(path)
     check_out_file(path, flag)
+    if path.suffix.lower() in EXPORT_SUFFIXES:  # export() writes the table beside it under that name
+        raise ScenarioError(CL, flag, "a ledger name not ending in .csv or .parquet (the ledger's CSV and Parquet "
+                            "exports are written beside it with those suffixes), e.g. runs.sqlite", str(path))
     if not path.exists():
         if not new_ok:
             raise ScenarioError(CL, flag, "an existing ledger", str(path))

@@ -67,6 +67,14 @@ class RightOfWay:
         return tuple(self._foe(other, self.via_chain(other), mine) for other in node.getConnections()
                      if other is not conn and not other.getFromLane().getID().startswith(":") and node.forbids(other, conn))
 
+    def gives_way_to(self, lane, conn) -> bool:
+        """Does one of the links from ``lane`` (a sumolib lane into ``conn``'s junction) give way to
+        ``conn``? (At an unregulated junction nobody gives way.)"""
+        node = conn.getFrom().getToNode()
+        if node.getType() == UNREGULATED or not getattr(node, "_prohibits", None):
+            return False
+        return any(node.forbids(conn, other) for other in lane.getOutgoing())
+
     def _foe(self, other, chain, mine) -> FoeLink:
         """``other`` (its internal lanes ``chain``) as a foe of the link whose internal lanes are ``mine``."""
         approach: dict[str, float] = {}

@@ -313,13 +313,14 @@ class Road:
         tls = conn.getTLSID() or ""
         return RouteLink(float(s_stop_m), conn.getFrom().getToNode().getID(), tls,
                          int(conn.getTLLinkIndex()) if tls else -1, link_state(conn), conn.getDirection() or "",
-                         self.right_of_way.foes(conn), self._oncoming(conn.getTo()),
+                         self.right_of_way.foes(conn), self._oncoming(conn.getTo(), conn),
                          tuple(lane for lane, *_ in self._oncoming(conn.getFrom())))
 
-    def _oncoming(self, edge) -> tuple[tuple[str, float, int, tuple[str, ...]], ...]:
+    def _oncoming(self, edge, conn=None) -> tuple[tuple[str, float, int, tuple[str, ...], bool], ...]:
         """(lane id, length, side: +1 left of ``edge``, -1 right, the internal lanes its connections
-        run over) of the lane bordering ``edge`` on every edge that runs the other way between the
-        same two junctions (its highest-index lane, next to the opposite direction in SUMO)."""
+        run over, whether a car there may wait for ``conn``: one of its links gives way to it) of the
+        lane bordering ``edge`` on every edge that runs the other way between the same two junctions
+        (its highest-index lane, next to the opposite direction in SUMO)."""
         a, b = edge.getFromNode().getID(), edge.getToNode().getID()
         mine = np.asarray(edge.getLanes()[-1].getShape(), float)
         tangent = mine[1] - mine[0]
@@ -330,7 +331,8 @@ class Road:
                 rel = np.asarray(lane.getShape(), float)[-1] - mine[0]  # its end, beside the start of ``edge``
                 side = 1 if tangent[0] * rel[1] - tangent[1] * rel[0] > 0 else -1
                 inside = tuple(dict.fromkeys(v.getID() for c in lane.getOutgoing() for v in self.right_of_way.via_chain(c)))
-                out.append((lane.getID(), float(lane.getLength()), side, inside))
+                waits = conn is not None and self.right_of_way.gives_way_to(lane, conn)
+                out.append((lane.getID(), float(lane.getLength()), side, inside, waits))
         return tuple(out)
 
     def _via_lanes(self, conn) -> list[tuple]:

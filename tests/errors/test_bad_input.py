@@ -183,6 +183,11 @@ CASES: dict[str, Case] = {
                                       ["--inject-crash"]),
     "suite_ledger_is_folder": _flag(["suite", ROOT / "scenarios" / "suite.toml", "--ledger", "{tmp}"], ["--ledger"],
                                     family="suite"),
+    # its CSV export (written beside it, suffix .csv) overwrote such a ledger after all the runs: refused up front
+    "suite_ledger_named_csv": _flag(["suite", ROOT / "scenarios" / "suite.toml", "--ledger", "{tmp}/runs.csv"],
+                                    ["--ledger", ".csv"], family="suite"),
+    "batch_ledger_named_parquet": _flag(["batch", SCN, "--ledger", "{tmp}/runs.parquet"], ["--ledger", ".parquet"],
+                                        family="batch"),
     "batch_keep_going_ledger_not_sqlite": _flag(["batch", SCN, "--keep-going", "--ledger", SCN], ["--ledger"],
                                                 family="batch"),
     # --- batch ---------------------------------------------------------------------------------

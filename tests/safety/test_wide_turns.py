@@ -28,7 +28,8 @@ from sumo_avoid.sumo.road import Road
 
 BIN = pathlib.Path(sumo.SUMO_HOME) / "bin"
 DATA = pathlib.Path(__file__).parent.parent / "data" / "tight_turn"
-WIDE = WideExit(120.0, (("L", 80.0),), inside=("I",), leaving=("B",))
+# lane L: one of its links gives way to the ego's (a car standing there may wait for the ego); K: none does
+WIDE = WideExit(120.0, (("L", 80.0, True), ("K", 80.0, False)), inside=("I",), leaving=("B",))
 
 
 def _first(rows):
@@ -47,7 +48,9 @@ def test_oncoming_first_hand_computed():
     assert _first([("L", 20.0, 5.0)]) == pytest.approx(60.0 / 5.0 - 5.0)  # 12 s: +7 s
     assert _first([("L", 75.0, 0.0)]) == pytest.approx(5.0 / 1.0 - 5.0)  # standing 5 m before: v floor 1 m/s
     assert _first([("L", 85.0, 3.0)]) == pytest.approx(-5.0)  # past the point, still moving: there now
-    assert _first([("L", 85.0, 0.0)]) == math.inf  # past the point and standing: waits for the junction
+    assert _first([("L", 85.0, 0.0)]) == math.inf  # past the point and standing: may wait for the ego
+    assert _first([("K", 85.0, 0.0)]) == pytest.approx(-5.0)  # ... but waits for others: stays in the sweep
+    assert _first([("K", 75.0, 0.0)]) == pytest.approx(5.0 / 1.0 - 5.0)  # before the point: as on L
     assert _first([("I", 3.0, 6.0)]) == -math.inf  # crossing the junction
     assert _first([("B", 5.0, 6.0)]) == -math.inf  # just out of it beside the ego's entry
     assert _first([("B", 20.0, 6.0)]) == math.inf  # ... and clear of it
@@ -75,12 +78,12 @@ def _task(net):
 def test_wide_exit_found_only_where_the_line_leaves_the_lane(nets):
     _, net = nets
     plan, task = _task(net["t130"])
-    (lane, length, side, via), = plan.links[0].oncoming
+    (lane, length, side, via, waits), = plan.links[0].oncoming
     assert lane == "CB_0" and side == 1 and via and all(v.startswith(":B_") for v in via)
     assert plan.links[0].leaving == ("BA_0",)
     exits = wide_exits(task, 4.25)
     assert list(exits) == [0]
-    (c_lane, c_off), = exits[0].conflicts
+    (c_lane, c_off, c_waits), = exits[0].conflicts
     assert c_lane == "CB_0" and length - 15.0 < c_off < length  # a few metres before the oncoming lane's end
     assert exits[0].s_clear_m > plan.links[0].s_stop_m
     assert wide_exits(task, 0.0) == {}  # no turning radius, no drivable line

@@ -47,3 +47,24 @@ def test_the_ego_waits_for_the_car_crossing_an_unregulated_junction(crossroads):
     m = outputs.run_metrics(runner.run(scenario.load(crossroads / "x.toml")))
     assert m["goal_reached"] and m["collisions"] == 0 and m["min_gap_m"] > 2.0
     assert m["rules_yields"] >= 1 and m["yield_violations"] == 0
+
+
+def test_which_lanes_give_way_to_a_link():
+    """nets/left_turn (a priority crossroads, two lanes per arm): the left turn from the south
+    (S2C_1 -> C2W, minor) gives way to the oncoming straight (N2C -> C2S, major), not the other way;
+    at the unregulated crossroads nobody gives way to anybody (SUMO's drivers go through)."""
+    from conftest import ROOT
+
+    net = sumolib.net.readNet(str(ROOT / "nets" / "left_turn.net.xml"), withInternal=True)
+    row = RightOfWay(net)
+    left = next(c for c in net.getLane("S2C_1").getOutgoing() if c.getTo().getID() == "C2W")
+    straight = next(c for c in net.getLane("N2C_0").getOutgoing() if c.getTo().getID() == "C2S")
+    assert row.gives_way_to(net.getLane("S2C_1"), straight) is True  # its left turn yields to the straight
+    assert row.gives_way_to(net.getLane("N2C_0"), left) is False  # nothing from N2C_0 yields to a minor left
+    assert row.gives_way_to(net.getLane("N2C_1"), left) is False
+
+
+def test_nobody_gives_way_at_an_unregulated_junction(crossroads):
+    net = sumolib.net.readNet(str(crossroads / "x.net.xml"), withInternal=True)
+    conn = net.getEdge("SC").getConnections(net.getEdge("CN"))[0]
+    assert not any(RightOfWay(net).gives_way_to(lane, conn) for e in ("EC", "NC", "WC") for lane in net.getEdge(e).getLanes())
