@@ -8,7 +8,7 @@ Nothing here talks to SUMO.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 import numpy as np
 
@@ -28,6 +28,16 @@ class FoeLink:
     line_m: float = 0.0  # distance from its stop line (the end of its incoming lane) to the conflict point, m
 
 
+class OncomingLane(NamedTuple):
+    """A lane running the other way beside an edge of the ego's route (from the net, static)."""
+
+    lane: str  # SUMO lane id
+    length_m: float
+    side: int  # +1 left of the ego's edge, -1 right
+    via: tuple[str, ...]  # the internal lanes its connections run over
+    gives_way: bool  # one of its links gives way to the ego's link (a car standing there may wait for the ego)
+
+
 @dataclass(frozen=True)
 class RouteLink:
     """A junction link the ego's route passes (from the net, static): where its stop line is on
@@ -41,10 +51,8 @@ class RouteLink:
     direction: str = ""  # s straight, l left, r right, t turn, L/R partly left/right
     foes: tuple[FoeLink, ...] = ()  # links with priority over this one (sumo.right_of_way)
     # the lane of each edge running opposite to the link's exit edge (into this junction) that borders
-    # it: (SUMO lane id, lane length m, side: +1 left, -1 right, the internal lanes its connections run
-    # over, whether one of its links gives way to this one); traffic there meets a car whose turn swings
-    # wide at the exit (safety.wide_turns)
-    oncoming: tuple[tuple[str, float, int, tuple[str, ...], bool], ...] = ()
+    # it; traffic there meets a car whose turn swings wide at the exit (safety.wide_turns)
+    oncoming: tuple[OncomingLane, ...] = ()
     leaving: tuple[str, ...] = ()  # the lane bordering the entry edge on each edge leaving the junction the other way
 
 

@@ -92,13 +92,13 @@ def wide_exits(task: EgoTask, turn_radius_m: float) -> dict[int, WideExit]:
         lo, hi = lanes.corridor(s)
         bent = np.abs(off) > 1e-9
         conflicts, ends, inside = [], [], []
-        for lane, length, side, via, waits in link.oncoming:
-            over = bent & ((off + reach > hi) if side > 0 else (off - reach < lo))
+        for onc in link.oncoming:
+            over = bent & ((off + reach > hi) if onc.side > 0 else (off - reach < lo))
             if over.any():
                 end = float(s[np.flatnonzero(over)[-1]]) + STEP_M
                 ends.append(end)
-                conflicts.append((lane, length - max(end + 0.5 * task.length_m - s_exit, 0.0), waits))
-                inside += via
+                conflicts.append((onc.lane, onc.length_m - max(end + 0.5 * task.length_m - s_exit, 0.0), onc.gives_way))
+                inside += onc.via
         if conflicts:
             out[k] = WideExit(max(ends) + task.length_m, tuple(conflicts), tuple(inside), link.leaving)
     return out

@@ -62,7 +62,7 @@ class RightOfWay:
                       and not o.getFromLane().getID().startswith(":"))
             return tuple(self._foe(o, chain, mine) for o, chain in others
                          if o.getToLane().getID() == target or _crosses(_chain_line(chain), line))
-        if not getattr(node, "_prohibits", None):
+        if not _has_logic(node):
             return ()
         return tuple(self._foe(other, self.via_chain(other), mine) for other in node.getConnections()
                      if other is not conn and not other.getFromLane().getID().startswith(":") and node.forbids(other, conn))
@@ -71,7 +71,7 @@ class RightOfWay:
         """Does one of the links from ``lane`` (a sumolib lane into ``conn``'s junction) give way to
         ``conn``? (At an unregulated junction nobody gives way.)"""
         node = conn.getFrom().getToNode()
-        if node.getType() == UNREGULATED or not getattr(node, "_prohibits", None):
+        if node.getType() == UNREGULATED or not _has_logic(node):
             return False
         return any(node.forbids(conn, other) for other in lane.getOutgoing())
 
@@ -121,6 +121,11 @@ def link_state(conn) -> str:
     through; it checks no collisions there): '=', the ego gives way to every crossing link
     (:meth:`RightOfWay.foes`)."""
     return "=" if conn.getFrom().getToNode().getType() == UNREGULATED else (conn.getState() or "")
+
+
+def _has_logic(node) -> bool:
+    """Whether sumolib read a junction logic (``<request>`` rows) for ``node``."""
+    return bool(getattr(node, "_prohibits", None))
 
 
 def _crosses(a: LineString | None, b: LineString | None) -> bool:

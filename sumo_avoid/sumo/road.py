@@ -30,7 +30,7 @@ from sumo_avoid.core.polyline import (
     polyline_point_at,
     polyline_project,
 )
-from sumo_avoid.core.types import LanePiece, RouteLink
+from sumo_avoid.core.types import LanePiece, OncomingLane, RouteLink
 from sumo_avoid.sumo.lanes import LaneIndex
 from sumo_avoid.sumo.right_of_way import RightOfWay, link_state
 
@@ -314,13 +314,12 @@ class Road:
         return RouteLink(float(s_stop_m), conn.getFrom().getToNode().getID(), tls,
                          int(conn.getTLLinkIndex()) if tls else -1, link_state(conn), conn.getDirection() or "",
                          self.right_of_way.foes(conn), self._oncoming(conn.getTo(), conn),
-                         tuple(lane for lane, *_ in self._oncoming(conn.getFrom())))
+                         tuple(o.lane for o in self._oncoming(conn.getFrom())))
 
-    def _oncoming(self, edge, conn=None) -> tuple[tuple[str, float, int, tuple[str, ...], bool], ...]:
-        """(lane id, length, side: +1 left of ``edge``, -1 right, the internal lanes its connections
-        run over, whether a car there may wait for ``conn``: one of its links gives way to it) of the
-        lane bordering ``edge`` on every edge that runs the other way between the same two junctions
-        (its highest-index lane, next to the opposite direction in SUMO)."""
+    def _oncoming(self, edge, conn=None) -> tuple[OncomingLane, ...]:
+        """The lane bordering ``edge`` on every edge that runs the other way between the same two
+        junctions (its highest-index lane, next to the opposite direction in SUMO); ``gives_way``:
+        one of its links gives way to ``conn``."""
         a, b = edge.getFromNode().getID(), edge.getToNode().getID()
         mine = np.asarray(edge.getLanes()[-1].getShape(), float)
         tangent = mine[1] - mine[0]
@@ -332,7 +331,7 @@ class Road:
                 side = 1 if tangent[0] * rel[1] - tangent[1] * rel[0] > 0 else -1
                 inside = tuple(dict.fromkeys(v.getID() for c in lane.getOutgoing() for v in self.right_of_way.via_chain(c)))
                 waits = conn is not None and self.right_of_way.gives_way_to(lane, conn)
-                out.append((lane.getID(), float(lane.getLength()), side, inside, waits))
+                out.append(OncomingLane(lane.getID(), float(lane.getLength()), side, inside, waits))
         return tuple(out)
 
     def _via_lanes(self, conn) -> list[tuple]:
