@@ -48,11 +48,12 @@ EXPORT_SUFFIXES = (".csv", ".parquet")
 
 
 def check(path, flag: str = "--ledger", new_ok: bool = True) -> None:
-    """``path`` is a ledger, or (``new_ok``) a file that can be created: not a folder, not a file of
-    another kind, not a SQLite database of something else. Raises ScenarioError naming ``flag``."""
+    """``path`` is a ledger, or (``new_ok``: one to write) a file that can be created, not named like its
+    exports (.csv, .parquet): not a folder, not a file of another kind, not a SQLite database of
+    something else. Raises ScenarioError naming ``flag``."""
     path = pathlib.Path(path)
     check_out_file(path, flag)
-    if path.suffix.lower() in EXPORT_SUFFIXES:  # export() writes the table beside it under that name
+    if new_ok and path.suffix.lower() in EXPORT_SUFFIXES:  # a ledger to write: export() would overwrite it
         raise ScenarioError(CL, flag, "a ledger name not ending in .csv or .parquet (the ledger's CSV and Parquet "
                             "exports are written beside it with those suffixes), e.g. runs.sqlite", str(path))
     if not path.exists():

@@ -306,11 +306,18 @@ def _text(tmp):
     return tmp / "notes.sqlite"
 
 
+def _csv_export(tmp):
+    (tmp / "runs.csv").write_text("key,scenario,seed\nk1,s,1\n")
+    return tmp / "runs.csv"
+
+
 _GOOD_RUN = '{"scenario": "s", "controller": "c", "seed": 1, "collisions": 0}'
 CASES.update({
     "report_missing": _report(lambda t: t / "none.sqlite", ["--out", "{tmp}/r.html"], ["{tmp}/none.sqlite"]),
     "report_empty_folder": _report(lambda t: t, ["--out", "{tmp}/r.html"], ["{tmp}"]),
     "report_text_file": _report(_text, ["--out", "{tmp}/r.html"], ["notes.sqlite"]),
+    # a batch's CSV export given where its ledger belongs: read as a ledger and refused (not as a name to write)
+    "report_csv_export": _report(_csv_export, ["--out", "{tmp}/r.html"], ["runs.csv", "SQLite"]),
     "report_sqlite_not_ledger": _report(_sqlite, ["--out", "{tmp}/r.html"], ["x.sqlite"]),
     "report_metrics_corrupt": _report(_runs_dir, ["--out", "{tmp}/r.html"], ["metrics.json"]),
     "report_metrics_not_object": _report(lambda t: _runs_dir(t, "[1, 2]"), ["--out", "{tmp}/r.html"],
