@@ -19,7 +19,11 @@ expressions, same order, first minimum on ties), so the detections are bit-ident
 (checked on the benchmark's scans and random scenes in tests/sensing/test_radar.py). numba was chosen
 because the numpy version spent 7.8 ms per scan of 100 egos on ~150 array operations over small
 per-ego arrays (the radar benchmark's largest own cost); this loop does the same work in a
-fraction of that. Compiled on first use and cached on disk (``cache=True``).
+fraction of that. Compiled on first use and cached on disk (``cache=True``). Reductions, slice
+assignments, sorts and searches are written as plain loops (:func:`_stable_argsort`,
+:func:`_searchsorted`): numba's own versions made the first compile take ~19 s of CPU, these ~8 s,
+with the same results (stable sorts of finite values; the sorted values, as np.sort's, do not depend
+on the algorithm).
 """
 from __future__ import annotations
 
@@ -96,7 +100,9 @@ def scan(spos, hd, svel, polys, tvel, ptr, cand, half, max_range):
                 rx, ry = polys[n, k, 0] - sx, polys[n, k, 1] - sy
                 rel[t, k, 0], rel[t, k, 1] = rx, ry
                 az[t, k] = wrap(math.atan2(ry, rx) - h)
-            lo_t, hi_t = az[t].min(), az[t].max()
+            lo_t, hi_t = az[t, 0], az[t, 0]
+            for k in range(1, K):  # (loops, not .min()/.max(): numba compiles array reductions slowly)
+                lo_t, hi_t = min(lo_t, az[t, k]), max(hi_t, az[t, k])
             lo[t], hi[t] = max(lo_t, -half), min(hi_t, half)  # clipped to the field of view
             ok[t] = (hi_t - lo_t < _PI) and (lo[t] < hi[t])
             f, nr = -np.inf, np.inf
@@ -113,7 +119,9 @@ def scan(spos, hd, svel, polys, tvel, ptr, cand, half, max_range):
                 nr = min(nr, math.sqrt(fx * fx + fy * fy))
             far[t], near[t] = f, nr
         # one-shadow pre-filter: j hidden when one ok i covers its interval and is wholly nearer
-        keep = ok.copy()
+        keep = np.empty(T, np.bool_)
+        for t in range(T):
+            keep[t] = ok[t]
         for j in range(T):
             if not ok[j]:
                 continue
@@ -136,14 +144,14 @@ def scan(spos, hd, svel, polys, tvel, ptr, cand, half, max_range):
             t = ridx[r]
             cuts[1 + 2 * r] = min(lo[t], half)  # lo >= -half and hi <= half already
             cuts[2 + 2 * r] = max(hi[t], -half)
-        cuts = np.sort(cuts)
+        cuts = _sorted(cuts)
         S = 2 * R
         owner = np.zeros(S, np.int64)
         has = np.zeros(S, np.bool_)
         nearest = np.empty(R)
         for r in range(R):
             nearest[r] = near[ridx[r]]
-        by_near = np.argsort(nearest, kind="mergesort")
+        by_near = _stable_argsort(nearest)
         for s in range(S):
             ang = 0.5 * (cuts[s] + cuts[s + 1]) + h
             best, bi = np.inf, 0
@@ -236,19 +244,28 @@ def candidates(spos, fwd, centre, radius, rows, max_range, cos_half, sin_half):
     E, N = spos.shape[0], centre.shape[0]
     if E == 0 or N == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    reach = (max_range + radius.max()) * (1 + 1e-9) + 1e-6
-    ax = 0 if centre[:, 0].max() - centre[:, 0].min() >= centre[:, 1].max() - centre[:, 1].min() else 1
-    key_all = centre[:, ax].copy()
-    order = np.argsort(key_all, kind="mergesort")
-    key = key_all[order]
+    rmax, x0, x1, y0, y1 = radius[0], centre[0, 0], centre[0, 0], centre[0, 1], centre[0, 1]
+    for n in range(1, N):  # (loops, not .max()/.min(): numba compiles array reductions slowly)
+        rmax = max(rmax, radius[n])
+        x0, x1 = min(x0, centre[n, 0]), max(x1, centre[n, 0])
+        y0, y1 = min(y0, centre[n, 1]), max(y1, centre[n, 1])
+    reach = (max_range + rmax) * (1 + 1e-9) + 1e-6
+    ax = 0 if x1 - x0 >= y1 - y0 else 1
+    key_all = np.empty(N)
+    for n in range(N):
+        key_all[n] = centre[n, ax]
+    order = _stable_argsort(key_all)
+    key = np.empty(N)
+    for q in range(N):
+        key[q] = key_all[order[q]]
     cap = max(64, 8 * E)
     out_e = np.empty(cap, np.int64)
     out_n = np.empty(cap, np.int64)
     buf = np.empty(N, np.int64)
     m = 0
     for e in range(E):
-        lo = np.searchsorted(key, spos[e, ax] - reach)
-        hi = np.searchsorted(key, spos[e, ax] + reach, side="right")
+        lo = _searchsorted(key, spos[e, ax] - reach, False)
+        hi = _searchsorted(key, spos[e, ax] + reach, True)
         k = 0
         fx, fy = fwd[e, 0], fwd[e, 1]
         for q in range(lo, hi):
@@ -263,8 +280,10 @@ def candidates(spos, fwd, centre, radius, rows, max_range, cos_half, sin_half):
         if m + k > cap:
             cap = 2 * (m + k)
             out_e, out_n = _grow(out_e, cap), _grow(out_n, cap)
-        out_n[m:m + k] = np.sort(buf[:k])
-        out_e[m:m + k] = e
+        srt = _sorted(buf[:k])
+        for q in range(k):  # (element loops: numba compiles slice assignment slowly)
+            out_n[m + q] = srt[q]
+            out_e[m + q] = e
         m += k
     return out_e[:m], out_n[:m]
 
@@ -272,18 +291,75 @@ def candidates(spos, fwd, centre, radius, rows, max_range, cos_half, sin_half):
 @njit(cache=True)
 def _grow(a, cap):
     b = np.empty(cap, a.dtype)
-    b[:a.shape[0]] = a
+    for i in range(a.shape[0]):
+        b[i] = a[i]
     return b
+
+
+@njit(cache=True)
+def _sorted(a):
+    """A new array of a's values in ascending order (merge sort; for finite values exactly np.sort's)."""
+    idx = _stable_argsort(a)
+    out = np.empty(a.shape[0], a.dtype)
+    for i in range(a.shape[0]):
+        out[i] = a[idx[i]]
+    return out
+
+
+@njit(cache=True)
+def _stable_argsort(x):
+    """Indices that sort x ascending, equal values in their original order (np.argsort kind='stable')."""
+    n = x.shape[0]
+    idx = np.empty(n, np.int64)
+    for i in range(n):
+        idx[i] = i
+    width = 1
+    tmp = np.empty(n, np.int64)
+    while width < n:  # bottom-up merge sort
+        for lo in range(0, n, 2 * width):
+            mid, hi = min(lo + width, n), min(lo + 2 * width, n)
+            i, j, k = lo, mid, lo
+            while i < mid and j < hi:
+                if x[idx[j]] < x[idx[i]]:
+                    tmp[k] = idx[j]
+                    j += 1
+                else:
+                    tmp[k] = idx[i]
+                    i += 1
+                k += 1
+            while i < mid:
+                tmp[k] = idx[i]
+                i += 1
+                k += 1
+            while j < hi:
+                tmp[k] = idx[j]
+                j += 1
+                k += 1
+        idx, tmp = tmp, idx
+        width *= 2
+    return idx
+
+
+@njit(cache=True)
+def _searchsorted(a, v, right):
+    """np.searchsorted(a, v, side="right" if right else "left") on ascending a: a binary search."""
+    lo, hi = 0, a.shape[0]
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if a[mid] < v or (right and a[mid] == v):
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
 
 
 def warm() -> None:
     """Load (or, the first time on a machine, compile) the kernel now: the batch fork server calls
     this once so that its forked runs do not each pay for it."""
-    frozen = np.zeros((0, 2))
-    frozen.flags.writeable = False  # target velocities straight from a Snapshot are read-only
-    for tvel in (np.zeros((0, 2)), frozen):  # numba compiles one version for each
-        scan(np.zeros((1, 2)), np.zeros(1), np.zeros((1, 2)), np.zeros((0, 4, 2)), tvel, np.zeros(2, np.int64),
-             np.zeros(0, np.int64), 0.5, 100.0)
+    tvel = np.zeros((0, 2))
+    tvel.flags.writeable = False  # radar.targets passes the target velocities read-only (one compiled version)
+    scan(np.zeros((1, 2)), np.zeros(1), np.zeros((1, 2)), np.zeros((0, 4, 2)), tvel, np.zeros(2, np.int64),
+         np.zeros(0, np.int64), 0.5, 100.0)
     one, ro, ro2 = np.zeros((1, 2)), np.zeros((1, 2)), np.ones(1)
     ro.flags.writeable = ro2.flags.writeable = False  # a Snapshot's arrays are read-only
     corners, centre, radius = boxes(ro, np.ones(1), np.zeros(1), ro2, ro2)

@@ -118,7 +118,9 @@ def targets(snap, obstacles=()):
     oc = allo.mean(axis=1)
     orad = np.sqrt(((allo - oc[:, None]) ** 2).sum(-1)).max(axis=1)
     allc = np.concatenate([np.concatenate([corners, np.repeat(corners[:, -1:], K - 4, axis=1)], axis=1), allo])
-    return (allc, np.concatenate([snap.vel, np.zeros((len(polys), 2))]), ids + tuple(f"obstacle{i}" for i in range(len(polys))),
+    vel = np.concatenate([snap.vel, np.zeros((len(polys), 2))])
+    vel.flags.writeable = False  # read-only like a Snapshot's: the kernel is compiled for one kind of array
+    return (allc, vel, ids + tuple(f"obstacle{i}" for i in range(len(polys))),
             np.concatenate([centre, oc]), np.concatenate([radius, orad]))
 
 
