@@ -176,17 +176,13 @@ def test_ctrl_c_kills_the_running_runs_and_records_none_of_them(tmp_path):
         assert con.execute("SELECT count(*) FROM runs WHERE status = 'failed'").fetchone()[0] == 0
 
 
-def test_dask_cluster_gives_the_same_metrics_as_the_local_pool(tmp_path):
-    from dask.distributed import LocalCluster
-
+def test_dask_cluster_gives_the_same_metrics_as_the_local_pool(tmp_path, dask_scheduler):
     specs = batch.expand([OVERTAKING], [1, 2], SHORT, ["apf_sa", "apf"])
     local = batch.BatchConfig(tuple(specs), tmp_path / "local" / "ledger.sqlite", workers=2)
     assert batch.run_batch(local, progress=False)["done"] == 4
-    with LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None,
-                      processes=True) as cluster:
-        rc = main(["batch", str(OVERTAKING), "--seeds", "1-2", "--controller", "apf_sa", "--controller", "apf",
-                   *sum((["--set", s] for s in SHORT), []), "--scheduler", cluster.scheduler_address,
-                   "--ledger", str(tmp_path / "dask" / "ledger.sqlite"), "--quiet"])
+    rc = main(["batch", str(OVERTAKING), "--seeds", "1-2", "--controller", "apf_sa", "--controller", "apf",
+               *sum((["--set", s] for s in SHORT), []), "--scheduler", dask_scheduler,
+               "--ledger", str(tmp_path / "dask" / "ledger.sqlite"), "--quiet"])
     assert rc == 0
     a = ledger.read(local.ledger).set_index("key")
     b = ledger.read(tmp_path / "dask" / "ledger.sqlite").set_index("key")

@@ -60,9 +60,7 @@ def _rows(db) -> int:
             return 0
 
 
-def test_tuner_resumes_after_sigkill_and_runs_the_same_on_dask(tmp_path):
-    from dask.distributed import LocalCluster
-
+def test_tuner_resumes_after_sigkill_and_runs_the_same_on_dask(tmp_path, dask_scheduler):
     a, b, c = tmp_path / "a", tmp_path / "b", tmp_path / "c"
     assert main(["tune", "formation", str(GAP), *TINY, "--workers", "2", "--out", str(a)]) == 0
     # 3 nests x 2 seeds initial, 3 x 2 Levy eggs, round(0.75) = 1 x 2 abandoned: 14 runs
@@ -89,9 +87,6 @@ def test_tuner_resumes_after_sigkill_and_runs_the_same_on_dask(tmp_path):
     assert (a / "tuned.toml").read_text() == (b / "tuned.toml").read_text()
     assert (a / "history.csv").read_text() == (b / "history.csv").read_text()
     assert (b / "convergence.png").stat().st_size > 10_000
-    with LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None,
-                      processes=True) as cluster:
-        assert main(["tune", "formation", str(GAP), *TINY, "--scheduler", cluster.scheduler_address,
-                     "--out", str(c)]) == 0
+    assert main(["tune", "formation", str(GAP), *TINY, "--scheduler", dask_scheduler, "--out", str(c)]) == 0
     assert (a / "history.csv").read_text() == (c / "history.csv").read_text()
     assert (a / "tuned.toml").read_text() == (c / "tuned.toml").read_text()
