@@ -12,6 +12,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from sumo_avoid.core.compiled import searchsorted
+
 
 @njit(cache=True, error_model="numpy")
 def _segment_min(ax, ay, bx, by, pts, best):
@@ -20,8 +22,8 @@ def _segment_min(ax, ay, bx, by, pts, best):
     xs = pts[:, 0]
     den = bx * bx + by * by
     reach = np.sqrt(best)
-    lo = np.searchsorted(xs, min(ax, ax + bx) - reach)
-    hi = np.searchsorted(xs, max(ax, ax + bx) + reach, side="right")
+    lo = searchsorted(xs, min(ax, ax + bx) - reach, False)
+    hi = searchsorted(xs, max(ax, ax + bx) + reach, True)
     for j in range(lo, hi):
         px, py = pts[j, 0] - ax, pts[j, 1] - ay
         t = 0.0

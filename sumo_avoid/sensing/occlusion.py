@@ -19,11 +19,9 @@ expressions, same order, first minimum on ties), so the detections are bit-ident
 (checked on the benchmark's scans and random scenes in tests/sensing/test_radar.py). numba was chosen
 because the numpy version spent 7.8 ms per scan of 100 egos on ~150 array operations over small
 per-ego arrays (the radar benchmark's largest own cost); this loop does the same work in a
-fraction of that. Compiled on first use and cached on disk (``cache=True``). Reductions, slice
-assignments, sorts and searches are written as plain loops (:func:`_stable_argsort`,
-:func:`_searchsorted`): numba's own versions made the first compile take ~19 s of CPU, these ~8 s,
-with the same results (stable sorts of finite values; the sorted values, as np.sort's, do not depend
-on the algorithm).
+fraction of that. Compiled on first use and cached on disk (``cache=True``). Reductions and slice
+copies are plain loops, sorts and searches the helpers of :mod:`sumo_avoid.core.compiled`: numba's
+own versions made the first compile take ~19 s of CPU, these ~8 s, with the same results.
 """
 from __future__ import annotations
 
@@ -31,6 +29,8 @@ import math
 
 import numpy as np
 from numba import njit
+
+from sumo_avoid.core.compiled import searchsorted, sorted_copy, stable_argsort
 
 _TWO_PI = 2 * np.pi
 _PI = np.pi
@@ -144,14 +144,14 @@ def scan(spos, hd, svel, polys, tvel, ptr, cand, half, max_range):
             t = ridx[r]
             cuts[1 + 2 * r] = min(lo[t], half)  # lo >= -half and hi <= half already
             cuts[2 + 2 * r] = max(hi[t], -half)
-        cuts = _sorted(cuts)
+        cuts = sorted_copy(cuts)
         S = 2 * R
         owner = np.zeros(S, np.int64)
         has = np.zeros(S, np.bool_)
         nearest = np.empty(R)
         for r in range(R):
             nearest[r] = near[ridx[r]]
-        by_near = _stable_argsort(nearest)
+        by_near = stable_argsort(nearest)
         for s in range(S):
             ang = 0.5 * (cuts[s] + cuts[s + 1]) + h
             best, bi = np.inf, 0
@@ -254,7 +254,7 @@ def candidates(spos, fwd, centre, radius, rows, max_range, cos_half, sin_half):
     key_all = np.empty(N)
     for n in range(N):
         key_all[n] = centre[n, ax]
-    order = _stable_argsort(key_all)
+    order = stable_argsort(key_all)
     key = np.empty(N)
     for q in range(N):
         key[q] = key_all[order[q]]
@@ -264,8 +264,8 @@ def candidates(spos, fwd, centre, radius, rows, max_range, cos_half, sin_half):
     buf = np.empty(N, np.int64)
     m = 0
     for e in range(E):
-        lo = _searchsorted(key, spos[e, ax] - reach, False)
-        hi = _searchsorted(key, spos[e, ax] + reach, True)
+        lo = searchsorted(key, spos[e, ax] - reach, False)
+        hi = searchsorted(key, spos[e, ax] + reach, True)
         k = 0
         fx, fy = fwd[e, 0], fwd[e, 1]
         for q in range(lo, hi):
@@ -280,7 +280,7 @@ def candidates(spos, fwd, centre, radius, rows, max_range, cos_half, sin_half):
         if m + k > cap:
             cap = 2 * (m + k)
             out_e, out_n = _grow(out_e, cap), _grow(out_n, cap)
-        srt = _sorted(buf[:k])
+        srt = sorted_copy(buf[:k])
         for q in range(k):  # (element loops: numba compiles slice assignment slowly)
             out_n[m + q] = srt[q]
             out_e[m + q] = e
@@ -294,63 +294,6 @@ def _grow(a, cap):
     for i in range(a.shape[0]):
         b[i] = a[i]
     return b
-
-
-@njit(cache=True)
-def _sorted(a):
-    """A new array of a's values in ascending order (merge sort; for finite values exactly np.sort's)."""
-    idx = _stable_argsort(a)
-    out = np.empty(a.shape[0], a.dtype)
-    for i in range(a.shape[0]):
-        out[i] = a[idx[i]]
-    return out
-
-
-@njit(cache=True)
-def _stable_argsort(x):
-    """Indices that sort x ascending, equal values in their original order (np.argsort kind='stable')."""
-    n = x.shape[0]
-    idx = np.empty(n, np.int64)
-    for i in range(n):
-        idx[i] = i
-    width = 1
-    tmp = np.empty(n, np.int64)
-    while width < n:  # bottom-up merge sort
-        for lo in range(0, n, 2 * width):
-            mid, hi = min(lo + width, n), min(lo + 2 * width, n)
-            i, j, k = lo, mid, lo
-            while i < mid and j < hi:
-                if x[idx[j]] < x[idx[i]]:
-                    tmp[k] = idx[j]
-                    j += 1
-                else:
-                    tmp[k] = idx[i]
-                    i += 1
-                k += 1
-            while i < mid:
-                tmp[k] = idx[i]
-                i += 1
-                k += 1
-            while j < hi:
-                tmp[k] = idx[j]
-                j += 1
-                k += 1
-        idx, tmp = tmp, idx
-        width *= 2
-    return idx
-
-
-@njit(cache=True)
-def _searchsorted(a, v, right):
-    """np.searchsorted(a, v, side="right" if right else "left") on ascending a: a binary search."""
-    lo, hi = 0, a.shape[0]
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if a[mid] < v or (right and a[mid] == v):
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
 
 
 def warm() -> None:
