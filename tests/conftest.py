@@ -102,19 +102,6 @@ def pytest_collection_modifyitems(items):
             item.add_marker("sumo")
 
 
-@pytest.fixture(scope="session")
-def dask_scheduler():
-    """The address of a local Dask cluster (2 worker processes, 1 thread each) for the tests that run
-    studies on Dask; one per test process, so tests that pytest-xdist gives the same worker share it
-    (each start costs the workers' imports and their fork servers). (pytest-xdist's ``loadgroup``,
-    which would put them on one worker, does not group anything under pytest 9.2 / xdist 3.8.)"""
-    from dask.distributed import LocalCluster
-
-    with LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None,
-                      processes=True) as cluster:
-        yield cluster.scheduler_address
-
-
 def pytest_configure(config):
     """Compile the radar's numba kernel once, here, before the test workers start (pytest-xdist): on a
     machine where it is not cached yet every worker, and every batch's fork server, would otherwise

@@ -1,4 +1,4 @@
-"""Batches on real libsumo: crash isolation, SIGKILL + resume, Dask == local pool, bad input,
+"""Batches on real libsumo: crash isolation, SIGKILL + resume, bad input (Dask: test_dask.py),
 the fork server (warm imports, one forked process per run) against fresh interpreters.
 
 Runs are short (5 s of simulated time, no plots) to keep the whole file around a minute.
@@ -17,7 +17,6 @@ import time
 import pytest
 from conftest import cli_in_process
 
-from sumo_avoid.cli import main
 from sumo_avoid.core.config import ScenarioError
 from sumo_avoid.studies import batch, ledger, worker
 from sumo_avoid.studies.worker import run_one
@@ -174,21 +173,6 @@ def test_ctrl_c_kills_the_running_runs_and_records_none_of_them(tmp_path):
     assert _alive_workers(proc.pid) == []
     with contextlib.closing(sqlite3.connect(db)) as con:
         assert con.execute("SELECT count(*) FROM runs WHERE status = 'failed'").fetchone()[0] == 0
-
-
-def test_dask_cluster_gives_the_same_metrics_as_the_local_pool(tmp_path, dask_scheduler):
-    specs = batch.expand([OVERTAKING], [1, 2], SHORT, ["apf_sa", "apf"])
-    local = batch.BatchConfig(tuple(specs), tmp_path / "local" / "ledger.sqlite", workers=2)
-    assert batch.run_batch(local, progress=False)["done"] == 4
-    rc = main(["batch", str(OVERTAKING), "--seeds", "1-2", "--controller", "apf_sa", "--controller", "apf",
-               *sum((["--set", s] for s in SHORT), []), "--scheduler", dask_scheduler,
-               "--ledger", str(tmp_path / "dask" / "ledger.sqlite"), "--quiet"])
-    assert rc == 0
-    a = ledger.read(local.ledger).set_index("key")
-    b = ledger.read(tmp_path / "dask" / "ledger.sqlite").set_index("key")
-    assert sorted(a.index) == sorted(b.index) == sorted(s.key for s in specs)
-    cols = METRIC_COLS + ["sa_escapes", "time_to_goal_s"]
-    assert a[cols].sort_index().equals(b[cols].sort_index())
 
 
 def test_run_key_covers_scenario_net_routes_overrides_controller_seed(tmp_path):
