@@ -73,13 +73,14 @@ def cli_in_process(*args, cwd=None) -> CliResult:
     return CliResult(rc, out.getvalue(), err.getvalue())
 
 
-_STARTS_SUMO = ("runner.run", "run_scenario", "SumoSim", "main([", "run_batch", "run_suite", "subprocess",
+_STARTS_SUMO = ("runner.run", "run_scenario", "SumoSim", "main([", "run_batch", "run_suite", "run_one(", "subprocess",
                 "sumo_avoid.cli", "radar_study", "benchmarks")
 
 
 def pytest_collection_modifyitems(items):
     """Mark the tests that start SUMO (``pytest -m "not sumo"`` runs the pure ones in seconds): a test
-    whose own source, or a module-level helper it calls, starts a simulation or a CLI process.
+    whose own source, a module-level helper it calls or a fixture of the test suite it uses (not one
+    of pytest's own, e.g. ``tmp_path``) starts a simulation, a batch run or a CLI process.
     Sources are read once per function and helpers listed once per module (a parametrised test
     is one function for all its cases)."""
     import functools
@@ -98,7 +99,9 @@ def pytest_collection_modifyitems(items):
             continue
         src = source(fn)
         called = [source(h) for h in helpers(item.module) if f"{h.__name__}(" in src]
-        if any(k in text for text in [src, *called] for k in _STARTS_SUMO) or "scenario_path" in item.fixturenames:
+        fixtures = [source(d.func) for name in item.fixturenames  # a fixture of the module or of conftest.py
+                    for d in item._fixtureinfo.name2fixturedefs.get(name, ()) if d.baseid]
+        if any(k in text for text in [src, *called, *fixtures] for k in _STARTS_SUMO) or "scenario_path" in item.fixturenames:
             item.add_marker("sumo")
 
 
