@@ -81,3 +81,16 @@ def test_planner_benchmark_replays_every_plan_of_a_run():
     assert n >= 2 and 0 < float(m.group(2)) <= float(m.group(3)) <= float(m.group(4))
     assert re.match(rf"^seed 1: {n} plans, in-run median", lines[0]) and lines[-3].startswith(f"in-run:   plans={n} ")
     assert lines[-2].startswith(f"cpu:      plans={n} ")
+
+
+def test_suite_time_reads_pytests_line_and_refuses_what_is_not_a_commit(capsys):
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        import suite_time
+    finally:
+        sys.path.pop(0)
+    assert suite_time.LINE.findall("862 passed, 1 warning in 149.71s (0:02:29)") == [("862", "149.71")]
+    assert suite_time.main(["no-such-commit", "HEAD"]) == 2
+    assert suite_time.main(["HEAD", "HEAD", "--pairs", "0"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 2 and "'no-such-commit' is not a commit" in err
