@@ -52,6 +52,9 @@ def main(argv=None) -> int:
     if a.pairs < 1:
         print("suite_time: error: --pairs must be at least 1", file=sys.stderr)
         return 2
+    if subprocess.run(["git", "-C", str(a.repo), "rev-parse", "--git-dir"], capture_output=True).returncode != 0:
+        print(f"suite_time: error: --repo {a.repo} is not a git repository", file=sys.stderr)
+        return 2
     for c in (a.old, a.new):
         if subprocess.run(["git", "-C", str(a.repo), "cat-file", "-e", f"{c}^{{commit}}"],
                           capture_output=True).returncode != 0:

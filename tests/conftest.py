@@ -9,6 +9,13 @@ import pytest
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "scenarios"
 DATA = pathlib.Path(__file__).resolve().parent / "data"
+# the studies' tests (batch, tune, Dask): a short overtaking run, the ledger columns compared, a tiny gain search
+OVERTAKING = SCENARIOS / "overtaking.toml"
+SHORT = ["sim.duration_s=5", "output.plots=false"]
+METRIC_COLS = ["collisions", "min_gap_m", "phi_coll", "phi_wall", "mean_speed_mps", "path_length_m", "steps",
+               "sumo_collisions", "goal_reached"]
+GAP = SCENARIOS / "formation" / "gap.toml"
+TINY_TUNE = ["--generations", "1", "--nests", "3", "--seeds", "2", "--set", "sim.duration_s=1", "--quiet"]
 
 
 def netconvert(src: str, out_dir: pathlib.Path, name: str, *options: str) -> pathlib.Path:
@@ -108,7 +115,7 @@ def pytest_collection_modifyitems(items):
 def pytest_configure(config):
     """Compile the radar's numba kernel once, here, before the test workers start (pytest-xdist): on a
     machine where it is not cached yet every worker, and every batch's fork server, would otherwise
-    compile it at the same time (~15 s of CPU each on this 2-core machine); later runs load it (~1 s)."""
+    compile it at the same time (7-8 s of CPU each on this 2-core machine); later runs load it (~1 s)."""
     if not hasattr(config, "workerinput"):  # the controller (or a run without workers), not a worker
         from sumo_avoid.sensing import occlusion
 

@@ -83,7 +83,7 @@ def test_planner_benchmark_replays_every_plan_of_a_run():
     assert lines[-2].startswith(f"cpu:      plans={n} ")
 
 
-def test_suite_time_reads_pytests_line_and_refuses_what_is_not_a_commit(capsys):
+def test_suite_time_reads_pytests_line_and_refuses_what_is_not_a_commit(capsys, tmp_path):
     sys.path.insert(0, str(ROOT / "benchmarks"))
     try:
         import suite_time
@@ -92,5 +92,6 @@ def test_suite_time_reads_pytests_line_and_refuses_what_is_not_a_commit(capsys):
     assert suite_time.LINE.findall("862 passed, 1 warning in 149.71s (0:02:29)") == [("862", "149.71")]
     assert suite_time.main(["no-such-commit", "HEAD"]) == 2
     assert suite_time.main(["HEAD", "HEAD", "--pairs", "0"]) == 2
+    assert suite_time.main(["HEAD", "HEAD", "--repo", str(tmp_path)]) == 2  # a folder that is no repository
     err = capsys.readouterr().err
-    assert err.count("\n") == 2 and "'no-such-commit' is not a commit" in err
+    assert err.count("\n") == 3 and "'no-such-commit' is not a commit" in err and "is not a git repository" in err

@@ -15,18 +15,14 @@ import sys
 import time
 
 import pytest
-from conftest import cli_in_process
+from conftest import METRIC_COLS, OVERTAKING, SHORT, cli_in_process
 
 from sumo_avoid.core.config import ScenarioError
 from sumo_avoid.studies import batch, ledger, worker
 from sumo_avoid.studies.worker import run_one
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-OVERTAKING = ROOT / "scenarios" / "overtaking.toml"
 SEGFAULT_NET = ROOT / "tests" / "data" / "segfault_net.toml"  # a real input that segfaults SUMO 1.28 on load
-SHORT = ["sim.duration_s=5", "output.plots=false"]
-METRIC_COLS = ["collisions", "min_gap_m", "phi_coll", "phi_wall", "mean_speed_mps", "path_length_m", "steps",
-               "sumo_collisions", "goal_reached"]
 
 
 def _cli(*args, **kw):

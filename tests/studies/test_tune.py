@@ -14,15 +14,13 @@ import time
 
 import pandas as pd
 import pytest
-from conftest import cli_in_process
+from conftest import GAP, TINY_TUNE, cli_in_process
 
 from sumo_avoid.cli import main
 from sumo_avoid.studies import ledger
 from sumo_avoid.studies.tune import FAILED_SCORE, gains, score
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-GAP = ROOT / "scenarios" / "formation" / "gap.toml"
-TINY = ["--generations", "1", "--nests", "3", "--seeds", "2", "--set", "sim.duration_s=1", "--quiet"]
 
 
 def test_gains_are_log_uniform_with_six_digits():
@@ -62,10 +60,10 @@ def _rows(db) -> int:
 
 def test_tuner_resumes_after_sigkill_to_the_same_result(tmp_path):
     a, b = tmp_path / "a", tmp_path / "b"
-    assert main(["tune", "formation", str(GAP), *TINY, "--workers", "2", "--out", str(a)]) == 0
+    assert main(["tune", "formation", str(GAP), *TINY_TUNE, "--workers", "2", "--out", str(a)]) == 0
     # 3 nests x 2 seeds initial, 3 x 2 Levy eggs, round(0.75) = 1 x 2 abandoned: 14 runs
     assert _rows(a / "ledger.sqlite") == 14
-    cmd = [sys.executable, "-m", "sumo_avoid.cli", "tune", "formation", str(GAP), *TINY, "--workers", "2",
+    cmd = [sys.executable, "-m", "sumo_avoid.cli", "tune", "formation", str(GAP), *TINY_TUNE, "--workers", "2",
            "--out", str(b)]
     proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             env={**os.environ, "CI": "true"})
@@ -81,7 +79,7 @@ def test_tuner_resumes_after_sigkill_to_the_same_result(tmp_path):
     time.sleep(1.0)
     before = ledger.row_hashes(b / "ledger.sqlite")
     assert 4 <= len(before) < 14 and not (b / "tuned.toml").exists()
-    assert main(["tune", "formation", str(GAP), *TINY, "--workers", "2", "--out", str(b)]) == 0
+    assert main(["tune", "formation", str(GAP), *TINY_TUNE, "--workers", "2", "--out", str(b)]) == 0
     after = ledger.row_hashes(b / "ledger.sqlite")
     assert len(after) == 14 and all(after[k] == h for k, h in before.items())  # finished runs not re-run
     assert (a / "tuned.toml").read_text() == (b / "tuned.toml").read_text()
