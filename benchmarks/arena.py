@@ -27,7 +27,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
 def plain(scn) -> float:
-    from sumo_avoid.rollout.arena import random_positions, square
+    from sumo_avoid.road.walls import random_positions, square
     from sumo_avoid.sumo.sim import SumoSim, sumo_args
 
     spec, arena = scn.spec, scn.spec.arena
@@ -50,7 +50,7 @@ def plain(scn) -> float:
 
 
 def neighbours() -> None:
-    from sumo_avoid.control.flock_terms import neighbour_pairs
+    from sumo_avoid.control.flocking.terms import neighbour_pairs
 
     rng = np.random.default_rng(0)
     print("neighbour pairs within 80 m, density 100 per 250 m square (ms per call):")
@@ -69,9 +69,9 @@ def neighbours() -> None:
 
 
 def main() -> None:
-    from sumo_avoid import outputs as evaluate
+    from sumo_avoid.runs import outputs as evaluate
     from sumo_avoid.metrics.order import flocking_metrics
-    from sumo_avoid.rollout import runner
+    from sumo_avoid.runs import runner
     from sumo_avoid.scenario import spec as scenario
 
     ap = argparse.ArgumentParser()

@@ -25,7 +25,8 @@ import statistics
 import tempfile
 import time
 
-from sumo_avoid.studies import batch, ledger, worker
+from sumo_avoid.runs import worker
+from sumo_avoid.studies import batch, ledger
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 HZ = os.sysconf("SC_CLK_TCK")

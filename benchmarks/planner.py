@@ -26,11 +26,11 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
 def main() -> None:
-    from sumo_avoid.core.polyline import polyline_project
+    from sumo_avoid.road.polyline import polyline_project
     from sumo_avoid.planning import ga
     from sumo_avoid.planning.pursuit import arena_bounds, rest_of
     from sumo_avoid.plots.planner import parse_path
-    from sumo_avoid.rollout import runner
+    from sumo_avoid.runs import runner
     from sumo_avoid.scenario import spec
     from sumo_avoid.studies.batch import parse_seeds
 

@@ -213,8 +213,8 @@ def side(which: str, toml: str, turns: Turns | None, profile: bool = False) -> d
     """Run one side (``plain`` or ``plugin``) of the benchmark in this process; its timings."""
     import libsumo
 
-    from sumo_avoid import outputs as evaluate
-    from sumo_avoid.rollout import runner
+    from sumo_avoid.runs import outputs as evaluate
+    from sumo_avoid.runs import runner
     from sumo_avoid.scenario import spec as scenario
 
     scn = scenario.load(pathlib.Path(toml))

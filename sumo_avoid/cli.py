@@ -17,19 +17,11 @@ import tempfile
 
 from sumo_avoid.control import CONTROLLERS
 from sumo_avoid.core.config import ScenarioError, ScenarioErrors
-from sumo_avoid.rollout import runner
+from sumo_avoid.runs import runner
 from sumo_avoid.scenario import spec as scenario
-from sumo_avoid.scenario.reference import format_reference
-from sumo_avoid.studies import (
-    batch,
-    files,
-    isolate,
-    report,
-    reproduce,
-    suite,
-    tune,
-    worker,
-)
+from sumo_avoid.scenario.key_reference import format_reference
+from sumo_avoid.runs import isolate, worker
+from sumo_avoid.studies import batch, files, report, reproduce, suite, tune
 from sumo_avoid.sumo import console
 
 EXIT_BAD_INPUT = 2
@@ -85,7 +77,7 @@ def _summary(m: dict, out: pathlib.Path) -> str:
 
 def cmd_run(args) -> int:
     """Validate, then run the scenario in a child process (the batch's worker run, forked from this
-    process: studies/isolate.py): a SUMO crash costs the child, and this one reports it in one line
+    process: runs/isolate.py): a SUMO crash costs the child, and this one reports it in one line
     (exit code 3)."""
     scn = scenario.load(args.scenario, args.overrides, controller=args.controller, seed=args.seed)
     if args.inject_crash is not None and args.inject_crash not in worker.CRASHES:

@@ -45,8 +45,8 @@ def scenario_path():
 
 def run_scenario(name: str, **kw):
     """Run a real scenario in real SUMO (libsumo) and return (RunResult, metrics dict)."""
-    from sumo_avoid import outputs as evaluate
-    from sumo_avoid.rollout import runner
+    from sumo_avoid.runs import outputs as evaluate
+    from sumo_avoid.runs import runner
     from sumo_avoid.scenario import spec as scenario
 
     scn = scenario.load(SCENARIOS / f"{name}.toml", kw.pop("overrides", []), **kw)

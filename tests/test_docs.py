@@ -1,7 +1,7 @@
 """docs/scenario_format.md is generated from the config dataclasses and must stay in sync."""
 from conftest import ROOT
 
-from sumo_avoid.scenario.reference import format_reference
+from sumo_avoid.scenario.key_reference import format_reference
 
 
 def test_scenario_format_doc_is_current():

@@ -4,12 +4,12 @@ Every controller is built as ``cls(params, context)`` (:class:`sumo_avoid.core.i
 and follows :class:`sumo_avoid.core.interfaces.Controller`. A new controller is one file here plus
 one line below (docs/writing_a_controller.md).
 """
-from sumo_avoid.control.apf import ApfController, ApfParams
-from sumo_avoid.control.apf_sa import ApfSaController, ApfSaParams
-from sumo_avoid.control.flock_terms import FlockingParams
-from sumo_avoid.control.flocking import FlockingController
-from sumo_avoid.control.formation import FormationController, FormationParams
-from sumo_avoid.control.ga_planner import GaPlannerController, GaPlannerParams
+from sumo_avoid.control.apf.apf import ApfController, ApfParams
+from sumo_avoid.control.apf.apf_sa import ApfSaController, ApfSaParams
+from sumo_avoid.control.flocking.terms import FlockingParams
+from sumo_avoid.control.flocking.flocking import FlockingController
+from sumo_avoid.control.formation.formation import FormationController, FormationParams
+from sumo_avoid.control.ga_planner.ga_planner import GaPlannerController, GaPlannerParams
 from sumo_avoid.control.scripted import ScriptedController, ScriptedParams
 from sumo_avoid.core.registry import Registry
 

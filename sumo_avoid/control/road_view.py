@@ -1,10 +1,10 @@
 """One ego's road in its route frame (SPEC §5), for every road-going controller.
 
 Per step :meth:`RoadView.scene` maps what the ego perceives into Frenet coordinates (s along the
-reference path, d across it, positive left; :class:`~sumo_avoid.core.frenet.RouteFrame`): the ego,
+reference path, d across it, positive left; :class:`~sumo_avoid.road.frenet.RouteFrame`): the ego,
 the other vehicles' footprints (centre, heading relative to the path, length, width, velocity
 (s_dot, d_dot)) and the bounds of the lanes of its own direction
-(:class:`~sumo_avoid.core.lanes.RouteLanes`). Vehicles wholly outside those lanes (oncoming traffic
+(:class:`~sumo_avoid.road.route_lanes.RouteLanes`). Vehicles wholly outside those lanes (oncoming traffic
 beyond the centre line, cars on a road nearby) are left out: the ego keeps to its lanes, and one
 that enters them is an obstacle from then on. In that frame a bend or a turn is straight, so a
 field computed there keeps the car in its lane through it; :meth:`RoadView.to_xy_velocity` maps
@@ -18,12 +18,12 @@ from typing import Callable
 
 import numpy as np
 
-from sumo_avoid.core.drivable import NONE, drivable_line
-from sumo_avoid.core.frenet import RouteFrame
-from sumo_avoid.core.gaps import GAP_MIN_M, lane_blockers
+from sumo_avoid.road.drivable import NONE, drivable_line
+from sumo_avoid.road.frenet import RouteFrame
+from sumo_avoid.road.gaps import GAP_MIN_M, lane_blockers
 from sumo_avoid.core.geometry import wrap_angle
-from sumo_avoid.core.lanes import RouteLanes
-from sumo_avoid.core.polyline import arc_lengths
+from sumo_avoid.road.route_lanes import RouteLanes
+from sumo_avoid.road.polyline import arc_lengths
 from sumo_avoid.core.types import EgoTask, Observation
 from sumo_avoid.sensing.perception import obstacle_vehicles
 
@@ -140,12 +140,12 @@ class RoadView:
         """Where the path changes lanes (an edge entered on a lane that does not lead on along the
         route), the lateral offset to follow (at the carrot, ``ahead_m`` ahead) and a speed limit,
         m/s, called once per step (``step_s``). (0, inf): follow the path into the next lane towards
-        the route's, which is free beside the ego (:func:`~sumo_avoid.core.gaps.lane_blockers`: the
+        the route's, which is free beside the ego (:func:`~sumo_avoid.road.gaps.lane_blockers`: the
         secure gap to whatever it senses behind and ahead in that lane). Otherwise the ego keeps to
         the centre of the lane it is in, drops back behind a car in the target lane that blocks it
         from ahead or alongside (``DROP_BACK_MPS`` below its speed: riding beside it, the gap never
         opens), and, at ``decel_mps2``, stops before its lane tapers off
-        (:meth:`~sumo_avoid.core.lanes.RouteLanes.lanes_end_s`) to wait there for the gap. A held
+        (:meth:`~sumo_avoid.road.route_lanes.RouteLanes.lanes_end_s`) to wait there for the gap. A held
         change goes once the lane has been free for ``LANE_FREE_S`` (on a two-lane roundabout the
         hold flipped on and off as ring cars came and went); one under way (the ego ``COMMIT_M``
         towards the lane) is carried through unless a car is alongside in it. In a bend tighter than

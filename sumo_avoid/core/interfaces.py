@@ -12,13 +12,18 @@ Metrics (:class:`~sumo_avoid.metrics.base.Metric`) run afterwards on the recordi
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, Protocol
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
 
 from sumo_avoid.core.snapshot import Snapshot
 from sumo_avoid.core.types import EgoTask, Keys, Motion, Needs, Observation
+
+if TYPE_CHECKING:  # type-only (the package order puts core below road; no runtime import)
+    from sumo_avoid.road.network import Road
 
 
 @dataclass(frozen=True)
@@ -27,11 +32,14 @@ class Context:
 
     seed: int  # the scenario seed
     step_s: float  # simulation step, s
-    road: Any = None  # sumo_avoid.sumo.road.Road: drivable area, edges, lines, route paths (read-only)
+    road: Road | None = None  # the net as data: drivable area, lanes, junctions, route paths (read-only); None in an arena
     walls: np.ndarray | None = None  # (k, 2) allowed area when the scenario has an [arena], else None
     obstacles: tuple[np.ndarray, ...] = field(default=())  # static obstacle polygons, each (k, 2) m
     turn_radius_m: float = 0.0  # the egos' smallest turning radius (the kinematic actuator's), m; 0: none
     yaw_rate_radps: float = float("inf")  # the egos' largest yaw rate (the kinematic actuator's), rad/s
+    # the scenario's validated parameter tables by table name ("controllers.apf", ...): a plug-in that
+    # drives with another's parameters (a formation member with APF's) reads them here, never a default
+    params: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
 
     def rng(self, *stream: int) -> np.random.Generator:
         """The random stream of one consumer: ``default_rng(seed)`` (the controller's) or

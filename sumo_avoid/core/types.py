@@ -8,68 +8,14 @@ Nothing here talks to SUMO.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import NamedTuple, Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 from sumo_avoid.core.snapshot import Snapshot
 
-
-@dataclass(frozen=True)
-class FoeLink:
-    """A junction link with priority over one of the ego's links (they cross or merge), from the
-    net's junction logic (static): its signal, and where its vehicles come from."""
-
-    tls: str = ""  # traffic light id, "" = not signalised
-    link_index: int = -1  # index into the light's state string
-    state: str = ""  # static right of way in the net (M, m, =, ...)
-    direction: str = ""  # s, l, r, t, L, R
-    approach: tuple[tuple[str, float], ...] = ()  # (SUMO lane id, distance from the lane's start to the conflict point), m
-    line_m: float = 0.0  # distance from its stop line (the end of its incoming lane) to the conflict point, m
-
-
-class OncomingLane(NamedTuple):
-    """A lane running the other way beside an edge of the ego's route (from the net, static)."""
-
-    lane: str  # SUMO lane id
-    length_m: float
-    side: int  # +1 left of the ego's edge, -1 right
-    via: tuple[str, ...]  # the internal lanes its connections run over
-    gives_way: bool  # one of its links gives way to the ego's link (a car standing there may wait for the ego)
-
-
-@dataclass(frozen=True)
-class RouteLink:
-    """A junction link the ego's route passes (from the net, static): where its stop line is on
-    the ego's reference path and which signal, if any, controls it."""
-
-    s_stop_m: float  # arc length along EgoTask.path of the stop line (end of the incoming lane), m
-    junction: str
-    tls: str = ""  # traffic light id, "" = not signalised
-    link_index: int = -1  # index into the light's state string (SUMO linkIndex)
-    state: str = ""  # the connection's static right of way in the net: M major, m minor, = equal, s stop, ...
-    direction: str = ""  # s straight, l left, r right, t turn, L/R partly left/right
-    foes: tuple[FoeLink, ...] = ()  # links with priority over this one (sumo.right_of_way)
-    # the lane of each edge running opposite to the link's exit edge (into this junction) that borders
-    # it; traffic there meets a car whose turn swings wide at the exit (safety.wide_turns)
-    oncoming: tuple[OncomingLane, ...] = ()
-    leaving: tuple[str, ...] = ()  # the lane bordering the entry edge on each edge leaving the junction the other way
-
-
-@dataclass(frozen=True)
-class LanePiece:
-    """One piece of the ego's reference path on one SUMO lane (from the net, static): where it is
-    on the path and where the other lanes of its edge lie across it (the lanes of the ego's own
-    direction; the opposite direction is another edge). Offsets are linear in s over the piece
-    (the path blends from one lane to another at the start of an edge)."""
-
-    s_start_m: float  # arc length along EgoTask.path where the piece starts, m
-    s_end_m: float  # ... and ends, m
-    edge: str  # SUMO edge id (internal ":..." edges inside junctions)
-    lane: int  # index of the lane the path follows on this piece
-    offsets_start_m: tuple[float, ...]  # d of every lane centre of the edge (by lane index) at s_start, m
-    offsets_end_m: tuple[float, ...]  # ... at s_end, m
-    widths_m: tuple[float, ...]  # lane widths (by lane index), m
+if TYPE_CHECKING:  # type-only: the road's route records (sumo_avoid.road.route), no runtime import
+    from sumo_avoid.road.route import LanePiece, RouteLink
 
 
 @dataclass(frozen=True)

@@ -4,8 +4,8 @@ from sumo_avoid.core.registry import Registry
 from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import clean
 from sumo_avoid.metrics.comfort import Comfort
-from sumo_avoid.metrics.flocking import FlockingOrder
-from sumo_avoid.metrics.formation import FormationScore
+from sumo_avoid.metrics.flock_score import FlockingOrder
+from sumo_avoid.metrics.formation_score import FormationScore
 from sumo_avoid.metrics.road_use import RoadUse
 from sumo_avoid.metrics.rules import RuleViolations
 from sumo_avoid.metrics.ssm import SurrogateSafety

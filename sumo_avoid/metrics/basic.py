@@ -15,7 +15,7 @@ import pandas as pd
 
 from sumo_avoid.core.curves import braking_curve_D  # SPEC §1 eq. 3 (re-exported)
 from sumo_avoid.core.geometry import convex_distance, convex_overlap, footprint_corners
-from sumo_avoid.metrics.egos import EgoRows
+from sumo_avoid.metrics.ego_rows import EgoRows
 from sumo_avoid.metrics.pairs import Rows
 
 __all__ = [

@@ -26,7 +26,7 @@ import pandas as pd
 
 from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import Metric
-from sumo_avoid.metrics.egos import EgoRows
+from sumo_avoid.metrics.ego_rows import EgoRows
 from sumo_avoid.metrics.standard import ego_rows
 from sumo_avoid.rollout.result import RunResult
 

@@ -44,7 +44,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from sumo_avoid.metrics.basic import fitness
-from sumo_avoid.metrics.egos import EgoRows
+from sumo_avoid.metrics.ego_rows import EgoRows
 
 R_COLL_M = 3.0
 _WIDEN = 1.0 + 1e-9  # candidate searches use a slightly larger radius; the exact test comes after

@@ -6,7 +6,7 @@ whose length (m) counts wholly when its midpoint qualifies, with the heading of 
 
 * ``wrong_way_m``: the midpoint is inside a normal lane's polygon (nearest centre line of those
   holding it) and outside every junction shape, and the car's **heading** is more than 90° from
-  that lane's direction there (:meth:`sumo_avoid.sumo.lanes.LaneIndex.against`): it faces the
+  that lane's direction there (:meth:`sumo_avoid.road.lane_index.LaneIndex.against`): it faces the
   lane's traffic (a ghost driver), whichever way it moves. None in an arena (its roads only give
   SUMO lanes to map the flock onto). Documented choice: backing up in one's own lane faces the
   lane's direction and is not wrong-way driving (it is ``reverse_m``); it used to count here,
@@ -25,9 +25,9 @@ import pandas as pd
 
 from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import Metric
-from sumo_avoid.metrics.egos import EgoRows
+from sumo_avoid.metrics.ego_rows import EgoRows
 from sumo_avoid.metrics.standard import ego_rows
-from sumo_avoid.rollout.arena import outside_distance as arena_outside_distance
+from sumo_avoid.road.walls import outside_distance as arena_outside_distance
 from sumo_avoid.rollout.result import RunResult
 
 

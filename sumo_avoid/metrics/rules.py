@@ -7,7 +7,7 @@ ego could have stopped comfortably (v^2 / (2 b_comf) <= distance to the line, b_
 scenario's ``[rules]``). Details per crossing in ``signal_crossings`` (ego, tls, link, time, state).
 
 ``yield_violations``: the ego's front bumper crosses the stop line of a link that must give way at
-that moment (:mod:`sumo_avoid.safety.yielding`) while a recorded vehicle of a foe link with
+that moment (:mod:`sumo_avoid.road.yielding`) while a recorded vehicle of a foe link with
 priority arrives at its conflict point within the critical gap t_c of the ego's movement
 (``[rules]`` critical_gap_s / critical_gap_left_s / zipper_headway_s; SUMO's lane positions from the
 recording).
@@ -25,12 +25,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from sumo_avoid.core.polyline import polyline_track
+from sumo_avoid.road.polyline import polyline_track
 from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.rollout.result import RunResult
-from sumo_avoid.safety.rules import RED, STOP_SIGNS
-from sumo_avoid.safety.yielding import (
+from sumo_avoid.safety.traffic import RED, STOP_SIGNS
+from sumo_avoid.road.yielding import (
     can_give_way,
     critical_gap_s,
     first_crossing,

@@ -1,4 +1,4 @@
-"""Surrogate safety from SUMO's SSM device on the egos (:mod:`sumo_avoid.sumo.ssm`): the run's
+"""Surrogate safety from SUMO's SSM device on the egos (:mod:`sumo_avoid.sumo.ssm_device`): the run's
 smallest TTC and PET and largest DRAC over the conflicts SUMO logged, and their count.
 
 SUMO logs an encounter only when one of its measures crosses the device's threshold, so the
@@ -9,7 +9,7 @@ extremes are clamped at the thresholds, which makes them exact and always define
     max_drac_mps2 = max(DRAC threshold, largest maxDRAC logged)
 
 A run without any conflict thus reports the thresholds themselves (5 s, 3 s, 1 m/s², see
-:class:`~sumo_avoid.sumo.ssm.SsmParams`), and a criterion such as ``min_ttc_s >= 1.5`` holds. All
+:class:`~sumo_avoid.sumo.ssm_device.SsmParams`), and a criterion such as ``min_ttc_s >= 1.5`` holds. All
 are None when the device did not run (arena scenarios). A TTC of 0 is a collision SUMO saw.
 """
 from __future__ import annotations
@@ -22,8 +22,8 @@ from sumo_avoid.rollout.result import RunResult
 
 
 def ssm_summary(conflicts, params) -> dict:
-    """The four ``metrics.json`` keys from a conflict table (:func:`sumo_avoid.sumo.ssm.read_conflicts`)
-    and the :class:`~sumo_avoid.sumo.ssm.SsmParams` SUMO ran with (None: the device was off)."""
+    """The four ``metrics.json`` keys from a conflict table (:func:`sumo_avoid.sumo.ssm_device.read_conflicts`)
+    and the :class:`~sumo_avoid.sumo.ssm_device.SsmParams` SUMO ran with (None: the device was off)."""
     if params is None or conflicts is None:
         return {"min_ttc_s": None, "max_drac_mps2": None, "min_pet_s": None, "ssm_conflicts": None}
 

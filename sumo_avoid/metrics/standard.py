@@ -9,9 +9,9 @@ from sumo_avoid.core.geometry import footprint_corners
 from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics import basic
 from sumo_avoid.metrics.base import Metric
-from sumo_avoid.metrics.egos import EgoRows
+from sumo_avoid.metrics.ego_rows import EgoRows
 from sumo_avoid.metrics.pairs import Rows
-from sumo_avoid.rollout.arena import outside_distance as arena_outside_distance
+from sumo_avoid.road.walls import outside_distance as arena_outside_distance
 from sumo_avoid.rollout.result import RunResult
 
 

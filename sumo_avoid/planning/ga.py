@@ -281,7 +281,7 @@ def free_space_paths(start, goal, k: int, n: int, points, p: GaParams, rng: np.r
 
 def clip(pop, bounds):
     """Waypoints kept inside the box ``bounds`` = (xmin, ymin, xmax, ymax), or by ``bounds(pop)`` when
-    it is a function (the road's corridor, :func:`sumo_avoid.planning.road.corridor_clip`), or
+    it is a function (the road's corridor, :func:`sumo_avoid.planning.corridor.corridor_clip`), or
     unchanged if None."""
     if bounds is None:
         return pop

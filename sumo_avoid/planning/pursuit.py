@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from sumo_avoid.core.geometry import wrap_angle
-from sumo_avoid.core.polyline import arc_lengths, polyline_point_at
+from sumo_avoid.road.polyline import arc_lengths, polyline_point_at
 
 
 def corner_angles(path) -> np.ndarray:

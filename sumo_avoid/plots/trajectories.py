@@ -27,7 +27,7 @@ from sumo_avoid.core import geometry
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
 
-    from sumo_avoid.sumo.road import Road
+    from sumo_avoid.road.network import Road
 
 __all__ = ["footprint_corners", "plot_timeseries", "plot_trajectories", "track_xy"]
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from sumo_avoid.core.config import FieldError
-from sumo_avoid.core.polyline import polyline_point_at
+from sumo_avoid.road.polyline import polyline_point_at
 from sumo_avoid.core.snapshot import Snapshot
 from sumo_avoid.core.types import EgoTask
 

@@ -10,7 +10,7 @@ import pandas as pd
 
 @dataclass(frozen=True)
 class Scene:
-    """The static world of a run: the road (sumo_avoid.sumo.road.Road), an arena's walls, obstacles."""
+    """The static world of a run: the road (sumo_avoid.road.network.Road), an arena's walls, obstacles."""
 
     road: Any
     walls: np.ndarray | None = None  # (k, 2) arena square, or None on a road
@@ -31,7 +31,7 @@ class RunResult:
     tables: dict = field(default_factory=dict)  # name -> DataFrame, written as NAME.csv (e.g. detections)
     tasks: dict = field(default_factory=dict)  # ego id -> EgoTask (route path, junction links, speed limits)
     signals: pd.DataFrame | None = None  # traffic light states: time_s, tls, state (a row per change)
-    ssm: Any = None  # sumo_avoid.sumo.ssm.SsmParams SUMO's SSM device ran with (conflicts in tables), None: off
+    ssm: Any = None  # sumo_avoid.sumo.ssm_device.SsmParams SUMO's SSM device ran with (conflicts in tables), None: off
     _memo: dict = field(default_factory=dict, compare=False, repr=False)
 
     @property

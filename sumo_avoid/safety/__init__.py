@@ -4,7 +4,7 @@ then ``ego.safety`` from LAYERS (``danger_time``: seed 004's radar danger-time b
 ``none`` = no layer."""
 from sumo_avoid.core.registry import Registry
 from sumo_avoid.safety.danger_time import DangerTimeLayer, DangerTimeParams
-from sumo_avoid.safety.rules import RulesParams, TrafficRulesLayer
+from sumo_avoid.safety.traffic import RulesParams, TrafficRulesLayer
 
 LAYERS = Registry("layer")
 LAYERS.register("danger_time", DangerTimeLayer, DangerTimeParams)

@@ -1,7 +1,7 @@
 """Turns a car cannot make inside its lane, and the oncoming traffic they meet (SPEC §5, rules layer).
 
 Where a junction's turn is tighter than the car's turning circle, the car drives the drivable line
-(:mod:`sumo_avoid.core.drivable`): wide before the turn, across the apex, and wide again at the
+(:mod:`sumo_avoid.road.drivable`): wide before the turn, across the apex, and wide again at the
 exit, where it may come within a few decimetres of the centre line, or past it. A car following that
 line strays from it by up to ``TRACK_ERROR_M`` at the exit (rand08, 130 deg right turn at a 4.25 m
 turning radius: 0.49 m), and its corner then sweeps the lane of the oncoming traffic. A driver of a
@@ -14,7 +14,7 @@ The line is the path of the car's centre: with s_w the last point of the stretch
 corner reaches s_w + L/2 (L its length), so the conflict point on the oncoming lane lies
 e = s_w + L/2 - s_exit before that lane's end (its stop line), and the ego has cleared the wide exit
 when its front is at s_clear = s_w + L. An oncoming vehicle x metres before the conflict point at
-speed v arrives in max(x, 0) / max(v, 1 m/s) (:func:`~sumo_avoid.safety.yielding.arrival_time`;
+speed v arrives in max(x, 0) / max(v, 1 m/s) (:func:`~sumo_avoid.road.yielding.arrival_time`;
 past that point it is in the ego's sweep until it has left its lane: rand08 seed 4, a car braking
 to the end of that lane was hit when counted only until its rear had passed the point). A car that
 *stands* past the point waits for the junction. Where one of its lane's links gives way to the
@@ -43,11 +43,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sumo_avoid.core.drivable import REACH_M, drivable_line
-from sumo_avoid.core.frenet import RouteFrame
-from sumo_avoid.core.lanes import RouteLanes
+from sumo_avoid.road.drivable import REACH_M, drivable_line
+from sumo_avoid.road.frenet import RouteFrame
+from sumo_avoid.road.route_lanes import RouteLanes
 from sumo_avoid.core.types import EgoTask
-from sumo_avoid.safety.yielding import STAND_MPS, arrival_time
+from sumo_avoid.road.yielding import STAND_MPS, arrival_time
 
 #: A car may stray this far from its drivable line in a tight turn (rand08: 0.49 m), m.
 TRACK_ERROR_M = 0.5

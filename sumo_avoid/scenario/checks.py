@@ -13,9 +13,9 @@ import numpy as np
 
 from sumo_avoid.core.config import ScenarioError
 from sumo_avoid.core.interfaces import Context
-from sumo_avoid.rollout.arena import random_positions, square
+from sumo_avoid.road.walls import random_positions, square
 from sumo_avoid.sumo.inputs import InputError, check_inputs, depart_times
-from sumo_avoid.sumo.road import Road
+from sumo_avoid.road.network import Road
 
 
 def is_convex(pts: np.ndarray, eps: float = 1e-9) -> bool:

@@ -3,7 +3,7 @@
 A scenario names a SUMO network, SUMO route files (vehicle types, vehicles, flows), which of
 those vehicles the plug-in drives (the egos), their controller and its parameters, the actuator
 limits and the output options. ``docs/scenario_format.md`` lists every key (generated from the
-dataclasses below by ``python -m sumo_avoid.scenario.reference``).
+dataclasses below by ``python -m sumo_avoid.scenario.key_reference``).
 """
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ from sumo_avoid.core.config import FieldError, ScenarioError, build, field_doc
 from sumo_avoid.metrics import METRICS
 from sumo_avoid.safety import LAYERS, RULES
 from sumo_avoid.safety.danger_time import DangerTimeParams
-from sumo_avoid.safety.rules import RulesParams
+from sumo_avoid.safety.traffic import RulesParams
 from sumo_avoid.scenario.checks import (
     DEFINED,
     SAME_KIND,

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sumo_avoid.core.polyline import route_directions, route_segments
+from sumo_avoid.road.polyline import route_directions, route_segments
 from sumo_avoid.core.snapshot import Snapshot
 from sumo_avoid.core.types import EgoTask, Observation
 from sumo_avoid.sensing.log import detections_table

@@ -1,7 +1,7 @@
 """Batches of runs (scenarios x seeds x parameter grid), each run in its own worker process.
 
 Every run is its own process, forked from a warm fork server or a fresh interpreter
-(:mod:`sumo_avoid.studies.worker`; libsumo runs one simulation per process, and a segfault in SUMO must
+(:mod:`sumo_avoid.runs.worker`; libsumo runs one simulation per process, and a segfault in SUMO must
 cost only its own run). A run that raises, dies by a signal or exceeds its timeout is recorded
 ``failed`` with its cause; the batch goes on. Results go to the SQLite ledger
 (:mod:`sumo_avoid.studies.ledger`) one transaction per run, written by this (parent) process only;
@@ -28,9 +28,9 @@ from sumo_avoid.core.config import ScenarioError, ScenarioErrors, build
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.spec import MAX_SEED, read_toml
 from sumo_avoid.studies import ledger as ledger_mod
-from sumo_avoid.studies import worker
+from sumo_avoid.runs import worker
 from sumo_avoid.studies.files import BatchFile
-from sumo_avoid.studies.worker import CRASHES, kill_all, run_one
+from sumo_avoid.runs.worker import CRASHES, kill_all, run_one
 
 KEY_VERSION = b"sumo_avoid-run-key-v1"
 MAX_SEEDS = 100_000  # seeds of one --seeds / seeds value: more is a typo (0-1000000000), not a study

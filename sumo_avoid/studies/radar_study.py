@@ -12,8 +12,8 @@ import pathlib
 
 import pandas as pd
 
-from sumo_avoid import outputs as evaluate
-from sumo_avoid.rollout import runner
+from sumo_avoid.runs import outputs as evaluate
+from sumo_avoid.runs import runner
 from sumo_avoid.scenario import spec as scenario
 
 KEYS = ["goal_reached", "collisions", "min_gap_m", "time_to_goal_s", "mean_speed_mps", "radar_warnings",

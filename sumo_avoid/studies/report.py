@@ -31,7 +31,7 @@ from sumo_avoid.plots.trajectories import (
 )
 from sumo_avoid.studies import ledger
 from sumo_avoid.studies.files import CL, check_out_file, write_atomic
-from sumo_avoid.sumo.road import Road
+from sumo_avoid.road.network import Road
 
 METRICS = ("collisions", "min_gap_m", "phi_coll", "phi_wall", "mean_speed_mps", "time_to_goal_s",
            "path_length_m", "sumo_collisions", "min_ttc_s", "min_ttc2d_s", "max_drac_mps2", "min_pet_s",

@@ -22,9 +22,9 @@ import pandas as pd
 
 from sumo_avoid.core.config import ScenarioError
 from sumo_avoid.metrics import basic
-from sumo_avoid.metrics.flocking import FlockingOrder
-from sumo_avoid.plots.arena import plot_arena
-from sumo_avoid.rollout import runner
+from sumo_avoid.metrics.flock_score import FlockingOrder
+from sumo_avoid.plots.arena_plots import plot_arena
+from sumo_avoid.runs import runner
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.studies import formation_study
 from sumo_avoid.studies.batch import MAX_SEEDS

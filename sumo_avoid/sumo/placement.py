@@ -5,7 +5,7 @@ maps that pose onto its network decides which of SUMO's vehicles see the ego (as
 at a junction, a collision partner):
 
 * **On its route** (the centre within the lanes of the ego's direction along its route,
-  :meth:`~sumo_avoid.core.lanes.RouteLanes.lane_at`; junctions widened): ``keepRoute=1`` with the
+  :meth:`~sumo_avoid.road.route_lanes.RouteLanes.lane_at`; junctions widened): ``keepRoute=1`` with the
   edge and lane as hints. SUMO maps the ego onto the closest lane of the edges ahead on its route
   (internal lanes included) and keeps the route, so the ego stopped at a roundabout entry is on
   the entry lane, not on the ring.
@@ -24,8 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sumo_avoid.core.frenet import RouteFrame
-from sumo_avoid.core.lanes import RouteLanes
+from sumo_avoid.road.frenet import RouteFrame
+from sumo_avoid.road.route_lanes import RouteLanes
 from sumo_avoid.core.types import EgoTask
 
 ON_ROUTE, OFF_ROUTE = 1, 2  # moveToXY keepRoute values

@@ -23,7 +23,7 @@ import numpy as np
 from sumo_avoid.core.snapshot import Snapshot
 from sumo_avoid.core.types import EgoTask
 from sumo_avoid.sumo.placement import RoutePlacement
-from sumo_avoid.sumo.ssm import SsmRequest, equip, ssm_args
+from sumo_avoid.sumo.ssm_device import SsmRequest, equip, ssm_args
 
 _DYNAMIC = (libsumo.constants.VAR_POSITION, libsumo.constants.VAR_ANGLE, libsumo.constants.VAR_SPEED,
             libsumo.constants.VAR_LANE_ID, libsumo.constants.VAR_LANEPOSITION)
@@ -57,7 +57,7 @@ def sumo_args(net: pathlib.Path, routes, additional, step_s: float, seed: int, l
     """SUMO's command line. ``sumo_collisions=False`` turns SUMO's own (lane-based) collision check
     off: for a flock moved off-lane anywhere in an arena it reports tens of thousands of spurious
     contacts per run (measured); the plug-in's footprint check is the reference there. ``ssm``
-    equips the named egos, and only them, with SUMO's SSM device (:mod:`sumo_avoid.sumo.ssm`): the
+    equips the named egos, and only them, with SUMO's SSM device (:mod:`sumo_avoid.sumo.ssm_device`): the
     route and additional files defining an ego are replaced by equipped copies in its folder."""
     if ssm is not None and ssm.ego_ids:
         routes, additional = equip(routes or (), ssm, "r"), equip(additional or (), ssm, "a")

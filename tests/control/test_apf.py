@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from sumo_avoid.control.apf import attraction, repulsion
+from sumo_avoid.control.apf.apf import attraction, repulsion
 
 
 def test_attraction_quadratic_inside_d():
@@ -52,7 +52,7 @@ def _waiting_car_scene(o_vel_d=0.0, lo=-2.35):
 
 
 def _controller():
-    from sumo_avoid.control.apf import ApfController, ApfParams
+    from sumo_avoid.control.apf.apf import ApfController, ApfParams
     from sumo_avoid.rollout.assemble import Context
 
     return ApfController(ApfParams(), Context(seed=1, step_s=0.1))

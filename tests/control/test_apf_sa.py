@@ -1,10 +1,10 @@
-"""APF-SA's escape bookkeeping (sumo_avoid.control.apf_sa): when an escape ends, on hand-made
+"""APF-SA's escape bookkeeping (sumo_avoid.control.apf.apf_sa): when an escape ends, on hand-made
 sequences of lateral positions (no SUMO)."""
 from collections import deque
 
 import pytest
 
-from sumo_avoid.control.apf_sa import ApfSaController, ApfSaParams, _EgoState
+from sumo_avoid.control.apf.apf_sa import ApfSaController, ApfSaParams, _EgoState
 from sumo_avoid.core.interfaces import Context
 
 

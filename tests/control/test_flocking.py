@@ -9,7 +9,7 @@ import pytest
 
 from sumo_avoid.actuation.relaxation import relaxation_step
 from sumo_avoid.control import CONTROLLERS
-from sumo_avoid.control.flock_terms import (
+from sumo_avoid.control.flocking.terms import (
     PRESETS,
     FlockingParams,
     combine,
@@ -21,9 +21,9 @@ from sumo_avoid.control.flock_terms import (
     segment_shills,
     shill,
 )
-from sumo_avoid.control.flocking import FlockingController
+from sumo_avoid.control.flocking.flocking import FlockingController
 from sumo_avoid.metrics.basic import braking_curve_D as D
-from sumo_avoid.rollout.arena import square
+from sumo_avoid.road.walls import square
 
 P4 = preset("paper_v4")
 

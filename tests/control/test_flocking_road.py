@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 import sumo
 
-from sumo_avoid.control.flock_road import Carriageway, course_limits, safety_caps
-from sumo_avoid.control.flock_terms import preset
+from sumo_avoid.control.flocking.road_flock import Carriageway, course_limits, safety_caps
+from sumo_avoid.control.flocking.terms import preset
 from sumo_avoid.core.geometry import footprint_corners
-from sumo_avoid.core.types import LanePiece
-from sumo_avoid.rollout import runner
+from sumo_avoid.road.route import LanePiece
+from sumo_avoid.runs import runner
 from sumo_avoid.scenario import spec as scenario
 
 BIN = pathlib.Path(sumo.SUMO_HOME) / "bin"

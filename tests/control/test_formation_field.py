@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from sumo_avoid.control import CONTROLLERS
-from sumo_avoid.control import formation_field as ff
-from sumo_avoid.control.formation import (
+from sumo_avoid.control.formation import field as ff
+from sumo_avoid.control.formation.formation import (
     FormationController,
     FormationParams,
     forward_cone,

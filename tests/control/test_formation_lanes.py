@@ -1,4 +1,4 @@
-"""The formation on a road, lane by lane (control/formation_lanes.py): the pure pieces pinned to
+"""The formation on a road, lane by lane (control/formation/lane_plan.py): the pure pieces pinned to
 values worked out by hand, and the road case in SUMO (the diamond narrows at the two-lane closure,
 breaks up into a column at the one-lane closure, with no collision and inside the carriageway)."""
 from __future__ import annotations
@@ -7,16 +7,16 @@ import numpy as np
 import pytest
 from conftest import SCENARIOS
 
-from sumo_avoid import outputs as evaluate
-from sumo_avoid.control import formation_field as ff
-from sumo_avoid.control.formation_lanes import (
+from sumo_avoid.runs import outputs as evaluate
+from sumo_avoid.control.formation import field as ff
+from sumo_avoid.control.formation.lane_plan import (
     assign_lanes,
     blocked_lanes,
     free_run,
     gamma_of,
     lane_units,
 )
-from sumo_avoid.rollout import runner
+from sumo_avoid.runs import runner
 from sumo_avoid.scenario import spec as scenario
 
 ROAD = SCENARIOS / "formation" / "road_closure.toml"

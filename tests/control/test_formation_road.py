@@ -7,11 +7,12 @@ import numpy as np
 import pytest
 from conftest import SCENARIOS
 
-from sumo_avoid import outputs as evaluate
-from sumo_avoid.control import formation_field as ff
-from sumo_avoid.control.formation_road import RoadFrame
-from sumo_avoid.core.types import EgoTask, LanePiece
-from sumo_avoid.rollout import runner
+from sumo_avoid.runs import outputs as evaluate
+from sumo_avoid.control.formation import field as ff
+from sumo_avoid.control.formation.road_frame import RoadFrame
+from sumo_avoid.core.types import EgoTask
+from sumo_avoid.road.route import LanePiece
+from sumo_avoid.runs import runner
 from sumo_avoid.scenario import spec as scenario
 
 ROAD = SCENARIOS / "formation" / "road_closure.toml"

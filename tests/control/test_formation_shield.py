@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sumo_avoid.control import formation_shield as sh
+from sumo_avoid.control.formation import shield as sh
 from sumo_avoid.core.geometry import footprint_corners
 
 SQUARE = np.array([[[4.0, -1.0], [6.0, -1.0], [6.0, 1.0], [4.0, 1.0]]])

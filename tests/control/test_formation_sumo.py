@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from conftest import SCENARIOS, cli_in_process
 
-from sumo_avoid import outputs as evaluate
+from sumo_avoid.runs import outputs as evaluate
 from sumo_avoid.core.config import ScenarioError
-from sumo_avoid.rollout import runner
+from sumo_avoid.runs import runner
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.obstacles import RandomObstaclesConfig, draw
 

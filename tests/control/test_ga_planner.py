@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from conftest import run_scenario
 
-from sumo_avoid.outputs import write_outputs
+from sumo_avoid.runs.outputs import write_outputs
 from sumo_avoid.planning.reference import crosses, shortest_path
 from sumo_avoid.plots.planner import parse_path
 

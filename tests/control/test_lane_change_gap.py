@@ -1,4 +1,4 @@
-"""The path's own lane changes wait for a gap (control/road_view.RoadView.lane_change, core/gaps.py)
+"""The path's own lane changes wait for a gap (control/road_view.RoadView.lane_change, road/gaps.py)
 in real SUMO, on a two-lane edge whose only connection onwards leaves from the left lane
 (tests/data/lane_change, built here by netconvert): the ego departs in the right lane at 8 m/s, 25 m
 ahead of a car in the left lane at 14 m/s. Krauss's secure gap for that car is 14 x 1 + (14^2 - 8^2)
@@ -9,8 +9,8 @@ car, which braked at 9 m/s^2 (SUMO's emergency braking). A front radar alone can
 import pytest
 from conftest import netconvert
 
-from sumo_avoid import outputs
-from sumo_avoid.rollout import runner
+from sumo_avoid.runs import outputs
+from sumo_avoid.runs import runner
 from sumo_avoid.scenario import spec as scenario
 
 

@@ -3,7 +3,7 @@
 * a 105 deg right turn whose internal lane netconvert draws at a 2 m junction radius
   (tests/data/tight_turn, built here), tighter than the car's 4.25 m: following the lane centre the
   ego came out wide, 7.4 m against the opposite lane (as on netgenerate's rand04, junction 420);
-  on the drivable line (core/drivable.py) it keeps to its lanes;
+  on the drivable line (road/drivable.py) it keeps to its lanes;
 * grid08 of the generated suite (netgenerate, all-way stops, randomTrips traffic), seed 2: with a
   constant-speed arrival for a car standing at its line the ego crossed together with a car SUMO
   let go, and the footprints touched in junction A1; first come, first served passes."""
@@ -11,8 +11,8 @@
 import pytest
 from conftest import netconvert, run_scenario
 
-from sumo_avoid import outputs
-from sumo_avoid.rollout import runner
+from sumo_avoid.runs import outputs
+from sumo_avoid.runs import runner
 from sumo_avoid.scenario import spec as scenario
 
 

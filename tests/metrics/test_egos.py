@@ -1,7 +1,7 @@
 import numpy as np
 import pandas as pd
 
-from sumo_avoid.metrics.egos import EgoRows
+from sumo_avoid.metrics.ego_rows import EgoRows
 
 
 def test_ego_rows_codes_and_order_by_id_then_step():

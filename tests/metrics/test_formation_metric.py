@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from sumo_avoid.control.formation_field import slots
-from sumo_avoid.metrics.formation import (
+from sumo_avoid.control.formation.field import slots
+from sumo_avoid.metrics.formation_score import (
     arrival_time,
     distortion,
     energy_rate,

@@ -15,7 +15,7 @@ from scipy.spatial import cKDTree
 from sumo_avoid.metrics import order
 from sumo_avoid.metrics.basic import phi_coll, phi_wall
 from sumo_avoid.metrics.order import flocking_metrics, order_parameters
-from sumo_avoid.rollout.arena import outside_distance, square
+from sumo_avoid.road.walls import outside_distance, square
 
 
 def _table(rows):

@@ -9,7 +9,7 @@ from conftest import ROOT, run_scenario
 
 from sumo_avoid.metrics.road_use import road_use
 from sumo_avoid.rollout.result import RunResult, Scene
-from sumo_avoid.sumo.road import Road
+from sumo_avoid.road.network import Road
 
 # left_turn: crossroads at (0, 0), 2 lanes of 3.5 m per direction, right-hand traffic: S2C runs
 # north at x = 1.75 and 5.25, C2S south at x = -1.75 and -5.25; road edges at x = +-7; the

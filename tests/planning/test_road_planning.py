@@ -1,9 +1,9 @@
-"""The GA planner's road frame (sumo_avoid/planning/road.py), pinned to hand-computed values."""
+"""The GA planner's road frame (sumo_avoid/planning/corridor.py), pinned to hand-computed values."""
 import numpy as np
 import pytest
 
-from sumo_avoid.core.types import LanePiece
-from sumo_avoid.planning.road import (
+from sumo_avoid.road.route import LanePiece
+from sumo_avoid.planning.corridor import (
     all_lanes_corridor,
     corridor_clip,
     follow_speed,

@@ -12,7 +12,7 @@ from sumo_avoid.plots.trajectories import (
     plot_timeseries,
     plot_trajectories,
 )
-from sumo_avoid.sumo.road import Road
+from sumo_avoid.road.network import Road
 
 NETS = pathlib.Path(__file__).resolve().parents[2] / "nets"
 COLUMNS = ["step", "time_s", "id", "is_ego", "x", "y", "vx", "vy", "speed", "heading", "length", "width"]
@@ -99,7 +99,7 @@ def test_a_vehicle_that_leaves_and_reenters_the_recording_is_drawn_in_pieces(tmp
     with a 40 m recording radius it is recorded near a, then not, then near b. Its drawn line breaks
     there: no segment of it jumps across the unrecorded 600 m (it did: a straight line across)."""
     from sumo_avoid.plots.trajectories import _draw, _new_figure, track_xy
-    from sumo_avoid.rollout import runner
+    from sumo_avoid.runs import runner
     from sumo_avoid.scenario import spec as scenario
 
     (tmp_path / "r.rou.xml").write_text("""<routes>

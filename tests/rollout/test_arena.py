@@ -9,11 +9,11 @@ import pathlib
 import numpy as np
 import pytest
 
-from sumo_avoid import outputs as evaluate
+from sumo_avoid.runs import outputs as evaluate
 from sumo_avoid.actuation.relaxation import relax
 from sumo_avoid.core.config import ScenarioError
-from sumo_avoid.rollout import runner
-from sumo_avoid.rollout.arena import outside_distance, random_positions, square
+from sumo_avoid.runs import runner
+from sumo_avoid.road.walls import outside_distance, random_positions, square
 from sumo_avoid.scenario import spec as scenario
 
 SCN = pathlib.Path(__file__).resolve().parents[2] / "scenarios"

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from sumo_avoid.core.config import ScenarioError
-from sumo_avoid.rollout import runner
+from sumo_avoid.runs import runner
 from sumo_avoid.scenario import spec as scenario
-from sumo_avoid.sumo.road import Road
+from sumo_avoid.road.network import Road
 from tests.conftest import ROOT, SCENARIOS
 
 NET = ROOT / "nets" / "left_turn.net.xml"

@@ -169,8 +169,8 @@ def toy_registered():
 
 @pytest.mark.sumo
 def test_a_toy_controller_and_layer_from_a_test_module_run_on_real_sumo(toy_registered):
-    from sumo_avoid.outputs import run_metrics
-    from sumo_avoid.rollout import runner
+    from sumo_avoid.runs.outputs import run_metrics
+    from sumo_avoid.runs import runner
     from sumo_avoid.rollout.assemble import metric_keys
     from sumo_avoid.scenario import spec as scenario
 
@@ -207,8 +207,8 @@ def test_output_metrics_adds_to_the_standard_set():
     """``output.metrics`` names metrics beside the standard ones (which the summary, plots, ledger
     and suites read): a subset removes nothing, and flocking's order parameters can be asked for a
     car controller (with [controllers.flocking]'s v_flock and r_c)."""
-    from sumo_avoid.outputs import run_metrics
-    from sumo_avoid.rollout import runner
+    from sumo_avoid.runs.outputs import run_metrics
+    from sumo_avoid.runs import runner
     from sumo_avoid.rollout.assemble import metric_names
     from sumo_avoid.scenario import spec as scenario
 

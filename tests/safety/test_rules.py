@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 import sumo
 
-from sumo_avoid import outputs
-from sumo_avoid.core.polyline import polyline_project_many
+from sumo_avoid.runs import outputs
+from sumo_avoid.road.polyline import polyline_project_many
 from sumo_avoid.core.types import EgoTask
-from sumo_avoid.rollout import runner
-from sumo_avoid.safety.rules import RulesParams, road_speed_cap
+from sumo_avoid.runs import runner
+from sumo_avoid.safety.traffic import RulesParams, road_speed_cap
 from sumo_avoid.scenario import spec as scenario
 
 BIN = pathlib.Path(sumo.SUMO_HOME) / "bin"

@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 import sumo
 
-from sumo_avoid import outputs
+from sumo_avoid.runs import outputs
 from sumo_avoid.core.types import EgoTask
-from sumo_avoid.rollout import runner
-from sumo_avoid.safety import rules
+from sumo_avoid.runs import runner
+from sumo_avoid.safety import traffic as rules
 from sumo_avoid.safety.wide_turns import (
     TURN_CRAWL_MPS,
     WideExit,
@@ -24,7 +24,7 @@ from sumo_avoid.safety.wide_turns import (
     wide_exits,
 )
 from sumo_avoid.scenario import spec as scenario
-from sumo_avoid.sumo.road import Road
+from sumo_avoid.road.network import Road
 
 BIN = pathlib.Path(sumo.SUMO_HOME) / "bin"
 DATA = pathlib.Path(__file__).parent.parent / "data" / "tight_turn"

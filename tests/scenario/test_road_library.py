@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 import sumolib
 
-from sumo_avoid import outputs
-from sumo_avoid.rollout import runner
+from sumo_avoid.runs import outputs
+from sumo_avoid.runs import runner
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.studies import suite
 

@@ -350,7 +350,7 @@ def test_tracker_coasts_along_the_given_traffic_direction():
 
 
 def test_route_directions_hand_values():
-    from sumo_avoid.core.polyline import route_directions
+    from sumo_avoid.road.polyline import route_directions
 
     path = np.array([[0.0, 0.0], [100.0, 0.0], [100.0, 100.0]])
     d = route_directions([path, None, path], np.array([[50.0, 2.0], [0.0, 0.0], [100.0, 50.0]]),
@@ -379,9 +379,11 @@ def _random_scene(rng, n_vehicles, n_egos, n_obstacles, dense=False):
 
 
 @pytest.mark.parametrize("mount", ["front", "rear", "left"])
-def test_kernel_is_bit_identical_to_the_numpy_reference(mount):
+def test_kernel_matches_the_numpy_reference(mount):
     """sensors/occlusion.py (numba) against the numpy formulation it replaced (tests/sensing/radar_reference.py):
-    the same detections, the same values to the last bit, on 150 random scenes (vehicles of random
+    the same detections, the same values within 1e-12 relative (1e-12 absolute near zero) -- two
+    implementations, so not bit for bit: numpy dispatches SIMD kernels by CPU (AVX-512 rounds the
+    last bits of ``hypot``/``arctan2`` differently from the compiled loop) -- on 150 random scenes (vehicles of random
     sizes and headings, convex obstacles, a 150 deg and a 60 deg field of view) and 20 dense jams."""
     rng = np.random.default_rng(11)
     total = 0
@@ -395,7 +397,7 @@ def test_kernel_is_bit_identical_to_the_numpy_reference(mount):
         got, ref = r.measure(s, egos, obstacles), visible_reference(r, s, egos, obstacles)
         assert got.target == ref["target"], k
         for f in ("ego", "range_m", "azimuth_rad", "radial_speed_mps"):
-            assert np.array_equal(getattr(got, f), ref[f]), (k, f)
+            np.testing.assert_allclose(getattr(got, f), ref[f], rtol=1e-12, atol=1e-12, err_msg=f"{k} {f}")
         total += got.n
     assert total > 1000  # the scenes do see things
 

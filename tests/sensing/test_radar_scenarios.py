@@ -4,8 +4,8 @@ import re
 
 import pytest
 
-from sumo_avoid import outputs as evaluate
-from sumo_avoid.rollout import runner
+from sumo_avoid.runs import outputs as evaluate
+from sumo_avoid.runs import runner
 from sumo_avoid.scenario import spec as scenario
 
 SCN = pathlib.Path(__file__).resolve().parents[2] / "scenarios"

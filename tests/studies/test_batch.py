@@ -18,8 +18,9 @@ import pytest
 from conftest import METRIC_COLS, OVERTAKING, SHORT, cli_in_process
 
 from sumo_avoid.core.config import ScenarioError
-from sumo_avoid.studies import batch, ledger, worker
-from sumo_avoid.studies.worker import run_one
+from sumo_avoid.runs import worker
+from sumo_avoid.studies import batch, ledger
+from sumo_avoid.runs.worker import run_one
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 SEGFAULT_NET = ROOT / "tests" / "data" / "segfault_net.toml"  # a real input that segfaults SUMO 1.28 on load
@@ -66,7 +67,7 @@ def _job_parent(arg: str):
 
 def _alive_workers(batch_pid: int) -> list[int]:
     """Worker processes of the batch process ``batch_pid``: its fork server and the runs forked
-    from it (``-m sumo_avoid.studies.forkserver PID``) or spawned runs (``"parent": PID`` in the job)."""
+    from it (``-m sumo_avoid.runs.forkserver PID``) or spawned runs (``"parent": PID`` in the job)."""
     pids = []
     for p in pathlib.Path("/proc").iterdir():
         try:
@@ -75,8 +76,8 @@ def _alive_workers(batch_pid: int) -> list[int]:
             continue
         if not p.name.isdigit():
             continue
-        if ("sumo_avoid.studies.forkserver" in args and args[-2:-1] == [str(batch_pid)]
-                or "sumo_avoid.studies.worker" in args and _job_parent(args[-2]) == batch_pid):
+        if ("sumo_avoid.runs.forkserver" in args and args[-2:-1] == [str(batch_pid)]
+                or "sumo_avoid.runs.worker" in args and _job_parent(args[-2]) == batch_pid):
             pids.append(int(p.name))
     return pids
 

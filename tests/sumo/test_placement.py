@@ -7,7 +7,7 @@ import numpy as np
 
 from sumo_avoid.core.types import EgoTask
 from sumo_avoid.sumo.placement import OFF_ROUTE, ON_ROUTE, RoutePlacement
-from sumo_avoid.sumo.road import Road
+from sumo_avoid.road.network import Road
 
 NET = pathlib.Path(__file__).parent.parent.parent / "nets" / "left_turn.net.xml"
 

@@ -1,4 +1,4 @@
-"""SUMO's SSM device on the egos only (sumo_avoid.sumo.ssm): its options, its XML read back, and
+"""SUMO's SSM device on the egos only (sumo_avoid.sumo.ssm_device): its options, its XML read back, and
 real runs in which an ego closes on a slower leader."""
 import json
 import math
@@ -11,13 +11,13 @@ import pytest
 from conftest import ROOT, run_scenario
 
 from sumo_avoid.metrics.ssm import ssm_summary
-from sumo_avoid.outputs import run_metrics
-from sumo_avoid.rollout import runner
+from sumo_avoid.runs.outputs import run_metrics
+from sumo_avoid.runs import runner
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.studies import ledger
 from sumo_avoid.studies.suite import Criterion
 from sumo_avoid.sumo.sim import SumoSim, SumoStartError, sumo_args
-from sumo_avoid.sumo.ssm import (
+from sumo_avoid.sumo.ssm_device import (
     COLUMNS,
     SsmParams,
     SsmRequest,

@@ -1,0 +1,308 @@
+"""``apf``: artificial potential field on a road (SPEC §2, seed 001), in the ego's route frame (SPEC §5).
+
+Everything is computed in Frenet coordinates (s along the route's reference path, d across it;
+:mod:`sumo_avoid.control.road_view`): a bend, a junction turn or a ramp looks straight to the
+field, and the command is mapped back to the plane. Per ego and step:
+
+* **Attraction** (SPEC §2, seed eq. 13-14, capped beyond ``d_att_m``) towards a *carrot*: the
+  point ``lookahead`` metres ahead of the ego along its route, (s + lookahead, d_lane) with d_lane
+  the centre of the lane it keeps (0: the path's lane; an escape's offset), or the goal once it is
+  closer than that. Its lateral part is the lane-keeping pull towards d_lane.
+* **Repulsion** (SPEC §2, seed eq. 3-8) ``K (1/rho - 1/rho0) / rho^2`` from every other vehicle's
+  footprint (rho = footprint-to-footprint distance, direction from the obstacle's nearest point
+  to the ego's) and, with its own gain and influence distance, across the road from the bounds of
+  the lanes of the ego's direction (rho = distance in d from the footprint's nearest corner to the
+  bound at that corner's s, always pushing inwards) (:class:`~sumo_avoid.road.route_lanes.RouteLanes`: the road edge, a two-way road's
+  centre line, inside a junction the internal lane of the route, where lanes end). For the bounds
+  the footprint is taken as aligned with the road, so that their push depends on where the car
+  is, not on its heading: measured from the real corners, a heading error moved a front corner
+  towards one bound, its push turned the car towards the other, and on a 3.2 m lane an ego kept
+  weaving from bound to bound at the 35 deg course limit after a roundabout (measured: 8.1 m/s of
+  10 along a straight exit, heading swinging +-0.15 rad with no decay).
+* **Influence distance from speed and braking**: ``rho0 = rho0_min + max(cos(phi), 0) *
+  (v_close^2 / (2 b) + t_h |v|)`` with ``phi`` the bearing of the obstacle from the heading and
+  ``v_close`` the closing speed: an obstacle ahead is felt from the stopping distance, one beside
+  only from ``rho0_min``. A vehicle whose footprint does not overlap the ego's across the road
+  (d, with ``gov_margin_m``; oncoming traffic in its lane, a car in the next lane) is felt from
+  ``rho0_beside_m`` plus the lateral stopping distance of its closing speed across the road, and
+  pushes only across it (no component along s): the ego can pass it.
+* **Velocity**: the ego moves along F (direction F/|F|) at ``min(cruise, |F| * cruise / F_att_max,
+  v_safe, v_curve)``: at the potential's minimum it stops; ``v_curve`` is the speed for the road
+  ahead (SPEC §5: sqrt(a_lat / |kappa|) within braking distance, RouteFrame.curve_speed_limit). ``v_safe`` is a speed governor: the speed from
+  which the ego can stop behind whatever is in its corridor ahead even if that brakes to a stop,
+  ``sqrt(v_lead^2 + 2 b (gap - s0))``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sumo_avoid.control.road_view import FrenetScene, RoadView
+from sumo_avoid.core.config import field_doc
+from sumo_avoid.core.geometry import (
+    convex_distance,
+    footprint_corners,
+)
+from sumo_avoid.core.types import EgoTask, Keys, Needs, Observation
+
+
+@dataclass(frozen=True)
+class ApfParams:
+    k_att: float = field_doc(1.0, doc="attraction gain K_att, 1/s (force in m/s units)")
+    d_att_m: float = field_doc(10.0, doc="attraction is capped beyond this distance d, m")
+    k_rep: float = field_doc(300.0, doc="vehicle/obstacle repulsion gain K_rep, m^3/s")
+    rho0_min_m: float = field_doc(2.0, doc="influence distance of an obstacle in the ego's strip at standstill, m")
+    rho0_beside_m: float = field_doc(1.0, doc="influence distance of a vehicle beside the ego's strip that does "
+                                              "not close across the road (lane-centred neighbours on 3.2 m lanes "
+                                              "are 1.4 m apart), m")
+    rho0_decel_mps2: float = field_doc(4.0, doc="braking used for the influence distance, m/s^2")
+    rho0_headway_s: float = field_doc(0.8, doc="time headway added to the influence distance ahead, s")
+    k_edge: float = field_doc(2.0, doc="road-edge and solid-line repulsion gain, m^3/s")
+    rho0_edge_m: float = field_doc(0.8, doc="road-edge and solid-line influence distance, m")
+    edge_lat_decel_mps2: float = field_doc(2.0, doc="lateral deceleration for the edge influence distance, m/s^2")
+    edge_reaction_s: float = field_doc(0.5, doc="reaction time added to the edge influence distance, s")
+    lookahead_min_m: float = field_doc(15.0, doc="smallest carrot distance along the route, m")
+    lookahead_time_s: float = field_doc(1.5, doc="carrot distance per unit speed, s")
+    sense_radius_m: float = field_doc(100.0, doc="obstacles farther than this are ignored, m")
+    gov_decel_mps2: float = field_doc(4.0, doc="speed governor: braking it plans with, m/s^2")
+    gov_standstill_m: float = field_doc(2.0, doc="speed governor: gap kept at standstill, m")
+    gov_margin_m: float = field_doc(0.4, doc="speed governor: lateral margin of the corridor ahead, m")
+    squeeze_speed_mps: float = field_doc(2.0, doc="speed past a standing vehicle in the governor's strip that the "
+                                         "ego can steer clear of (and of such a vehicle), m/s")
+    squeeze_closing_mps: float = field_doc(0.2, doc="such a vehicle closing across the road faster than this "
+                                           "blocks the strip instead, m/s")
+    squeeze_clear_m: float = field_doc(0.1, doc="lateral clearance the ego must be able to reach to pass it, m")
+    max_course_deg: float = field_doc(35.0, doc="moving forward, the commanded direction stays within this angle of the road's, deg")
+    max_lat_speed_mps: float = field_doc(1.5, doc="moving forward, the commanded speed across the road stays below this, m/s")
+    curve_lat_accel_mps2: float = field_doc(2.5, doc="speed for the road ahead: lateral acceleration in bends, m/s^2")
+    curve_decel_mps2: float = field_doc(3.0, doc="speed for the road ahead: braking before a bend, m/s^2")
+
+
+@dataclass(frozen=True)
+class Field:
+    """Potential and force at candidate ego positions (C of them), plus the governor's speed."""
+
+    U: np.ndarray  # (C,)
+    F: np.ndarray  # (C, 2)
+    v_safe: float  # m/s, for the first candidate (the ego's real position)
+
+
+def attraction(q, target, k_att, d):
+    """SPEC §2 capped attraction at points q (C,2): returns U (C,), F (C,2)."""
+    diff = np.asarray(q, float) - np.asarray(target, float)
+    rho = np.hypot(diff[:, 0], diff[:, 1])
+    near = rho <= d
+    U = np.where(near, 0.5 * k_att * rho**2, d * k_att * rho - 0.5 * k_att * d**2)
+    scale = np.where(near, k_att, d * k_att / np.maximum(rho, 1e-12))
+    return U, -scale[:, None] * diff
+
+
+def repulsion(rho, direction, rho0, k_rep, rho_floor=0.2):
+    """SPEC §2 repulsion for M obstacle distances rho (M,), unit directions (M,2) away from the
+    obstacle, influence distances rho0 (M,): returns U (M,), F (M,2)."""
+    r = np.maximum(np.asarray(rho, float), rho_floor)
+    inside = r < rho0
+    diff = np.where(inside, 1.0 / r - 1.0 / rho0, 0.0)
+    U = 0.5 * k_rep * diff**2
+    F = (k_rep * diff / r**2)[:, None] * direction
+    return U, F
+
+
+def _unit(v):
+    n = np.hypot(v[..., 0], v[..., 1])
+    return v / np.maximum(n, 1e-12)[..., None], n
+
+
+class ApfController:
+    """Plain potential field (no escape from local minima), in each ego's route frame."""
+
+    needs = Needs(goals=True)
+    metrics = ()  # metrics of its own beside the standard set
+    stats_keys = Keys()  # what stats() writes: nothing
+
+    def __init__(self, params: ApfParams, ctx):
+        self.p = params
+        self.max_course = np.radians(params.max_course_deg)
+        self.rng = ctx.rng()
+        self.step_s = float(ctx.step_s)
+        self.steering = (float(ctx.turn_radius_m), float(ctx.yaw_rate_radps))  # the drivable line, the speed in turns (RoadView)
+        self.tasks: dict[str, EgoTask] = {}
+        self.views: dict[str, RoadView] = {}
+        self.last_force: dict[str, float] = {}
+
+    def add_ego(self, task: EgoTask) -> None:
+        self.tasks[task.vid] = task
+        self.views[task.vid] = RoadView(task, *self.steering)
+
+    def remove_ego(self, vid: str) -> None:
+        self.tasks.pop(vid, None)
+        self.views.pop(vid, None)
+
+    def stats(self) -> dict:
+        return {}
+
+    def tables(self) -> dict:
+        return {}
+
+    # --- targets (Frenet) ------------------------------------------------------------------
+    def lookahead(self, speed: float) -> float:
+        return max(self.p.lookahead_min_m, self.p.lookahead_time_s * abs(speed))
+
+    def carrot(self, view: RoadView, sc: FrenetScene, lateral_offset: float = 0.0) -> np.ndarray:
+        """(s, d) the attraction pulls towards."""
+        ahead = self.lookahead(float(np.hypot(*sc.vel)))
+        if np.hypot(*(view.goal - sc.q)) <= ahead and lateral_offset == 0.0:
+            return view.goal
+        return np.array([min(sc.s + ahead, view.length_m), lateral_offset])
+
+    def scene(self, obs: Observation, row: int, vid: str) -> FrenetScene:
+        return self.views[vid].scene(obs, row, self.p.sense_radius_m)
+
+    # --- the field (Frenet) ----------------------------------------------------------------
+    def field(self, sc: FrenetScene, q_cand: np.ndarray, target: np.ndarray, heading: float | None = None) -> Field:
+        """Potential, force and governor speed for the ego placed at ``q_cand`` (C,2) in (s, d)
+        (with its own relative heading, or ``heading`` in rad)."""
+        p = self.p
+        q_cand = np.atleast_2d(np.asarray(q_cand, float))
+        C = len(q_cand)
+        h = sc.heading if heading is None else heading
+        L, W, v_ego = sc.length, sc.width, sc.vel
+        hd = np.array([np.cos(h), np.sin(h)])
+        U, F = attraction(q_cand, target, p.k_att, p.d_att_m)
+        ego_corners = footprint_corners(q_cand, np.full(C, h), np.full(C, L), np.full(C, W))  # (C,4,2)
+
+        v_safe = np.inf
+        O = len(sc.o_pos)
+        if O:
+            oc = footprint_corners(sc.o_pos, sc.o_heading, sc.o_length, sc.o_width)
+            P = np.repeat(ego_corners, O, axis=0)
+            Q = np.tile(oc, (C, 1, 1))
+            rho, p_ego, p_obs = convex_distance(P, Q)
+            centre_dir, _ = _unit(np.repeat(q_cand, O, axis=0) - np.tile(sc.o_pos, (C, 1)))
+            away, n = _unit(p_ego - p_obs)
+            away = np.where((n > 1e-6)[:, None], away, centre_dir)
+            towards = -away
+            cos_phi = np.maximum(towards @ hd, 0.0)
+            v_rel = v_ego[None, :] - np.tile(sc.o_vel, (C, 1))
+            closing = np.maximum(np.einsum("ij,ij->i", v_rel, towards), 0.0)
+            # a vehicle beside the ego's lane strip (no overlap across the road, e.g. oncoming in
+            # its own lane, or slower in the next lane) is felt from its closing speed across the
+            # road only: passing it is no threat, drifting towards it is
+            # road; a standing one the ego can steer clear of in time within its lanes is passed the
+            # same way, at a crawl (_squeeze, the governor)
+            e_lo, e_hi = np.repeat(ego_corners[..., 1].min(1), O), np.repeat(ego_corners[..., 1].max(1), O)
+            o_lo, o_hi = np.tile(oc[..., 1].min(1), C), np.tile(oc[..., 1].max(1), C)
+            side = np.sign(np.tile(sc.o_pos[:, 1], C) - np.repeat(q_cand[:, 1], O))
+            lat_closing = np.maximum(v_rel[:, 1] * side, 0.0)
+            beside = (e_lo - p.gov_margin_m > o_hi) | (e_hi + p.gov_margin_m < o_lo)
+            squeeze = ~beside & self._squeeze(sc, q_cand, oc, (o_lo, o_hi), side, lat_closing)
+            beside = beside | squeeze
+            # its influence distance is the clearance kept beside a car plus the lateral stopping
+            # distance of its closing speed: the ego's own speed (the headway term, for following)
+            # does not count, so a lane-centred car in the next lane does not push the ego at all
+            # (at 2 m and 0.8 s headway a car in the next lane pushed an ego at 20 m/s from 13 m away;
+            # ramp_main seed 1: it drifted 1.15 m towards the merging lane and was side-swiped)
+            rho0 = np.where(beside, p.rho0_beside_m + lat_closing**2 / (2 * p.rho0_decel_mps2),
+                            p.rho0_min_m + cos_phi * (closing**2 / (2 * p.rho0_decel_mps2)
+                                                      + p.rho0_headway_s * np.hypot(*v_ego)))
+            Ur, Fr = repulsion(rho, away, rho0, p.k_rep)
+            Fr[:, 0] = np.where(beside, 0.0, Fr[:, 0])  # ... and pushes only across it, never back
+            U = U + Ur.reshape(C, O).sum(axis=1)
+            F = F + Fr.reshape(C, O, 2).sum(axis=1)
+            v_safe = self._governor(q_cand[0], hd, L, W, oc, sc.o_vel, squeeze[:O])
+
+        # the bounds of the ego's lanes, one line on each side, repel across the road (always
+        # inwards: a car past a bound is pushed back, never further out) from the footprint's
+        # corner nearest to each, with the bound taken at that corner's s
+        strip = footprint_corners(q_cand, np.zeros(C), np.full(C, L), np.full(C, W))  # aligned with the road
+        lo, hi = sc.corridor(strip[..., 0].ravel())
+        cd = strip[..., 1].ravel()
+        lo_here, hi_here = sc.corridor(np.array([sc.s]))
+        room = max(0.5 * (float(hi_here[0] - lo_here[0]) - W), 0.1)  # beside a centred car, m
+        for rho, inward in (((cd - lo).reshape(C, 4).min(axis=1), 1.0), ((hi - cd).reshape(C, 4).min(axis=1), -1.0)):
+            closing = max(-inward * float(v_ego[1]), 0.0)  # a car drifting towards the bound feels it earlier
+            rho0 = p.rho0_edge_m + closing**2 / (2.0 * p.edge_lat_decel_mps2) + p.edge_reaction_s * closing
+            rho0 = min(rho0, 0.8 * room)  # in a narrow lane a centred car feels neither bound
+            Ur, Fr = repulsion(rho, np.tile([0.0, inward], (C, 1)), np.full(C, rho0), p.k_edge, rho_floor=0.05)
+            U, F = U + Ur, F + Fr
+        return Field(U, F, float(v_safe))
+
+    def _squeeze(self, sc: FrenetScene, q_cand, oc, o_span, side, lat_closing) -> np.ndarray:
+        """(C*O,) bool: the vehicle stands (or crawls) and does not close across the road, and the
+        ego, taken as aligned with the road (like for the bounds: a heading turned away from the
+        vehicle must not make its rear corner count), clears it with ``squeeze_clear_m`` by a small
+        sideways shift (<= ``gov_margin_m``) that keeps it in its lanes and that it can make before
+        reaching it (shift <= gap ahead x tan(max_course)).
+        Such a vehicle is passed at a crawl while its push widens the gap: a car waiting at the
+        oncoming lane's stop line with its nose turned in, 0.55 m ahead of the ego's corner and 0.14 m
+        to its side, had stopped the ego for good inside a junction while it waited for the ego
+        (netgenerate spider net with randomTrips traffic)."""
+        p, C, O, L = self.p, len(q_cand), len(sc.o_pos), sc.length
+        qs, qd = np.repeat(q_cand[:, 0], O), np.repeat(q_cand[:, 1], O)
+        e_lo, e_hi = qd - 0.5 * sc.width, qd + 0.5 * sc.width
+        o_lo, o_hi = o_span  # the vehicles' d spans, (C*O,) each, as field() has them
+        shift = np.where(side > 0, e_hi - o_lo, o_hi - e_lo) + p.squeeze_clear_m
+        lo, hi = sc.corridor(q_cand[:, 0])
+        room = np.where(side > 0, e_lo - shift >= np.repeat(lo, O), e_hi + shift <= np.repeat(hi, O))
+        gap = np.tile(oc[..., 0].min(1), C) - (qs + 0.5 * L)
+        in_time = (shift <= 0.0) | (shift <= np.maximum(gap, 0.0) * np.tan(self.max_course))
+        slow = np.tile(np.hypot(*sc.o_vel.T), C) <= p.squeeze_speed_mps
+        small = shift <= p.gov_margin_m  # it reaches at most gov_margin - clear into the ego's strip: the
+        # shifted ego needs no check against the others (their own pushes keep it off them)
+        return slow & small & (lat_closing <= p.squeeze_closing_mps) & room & in_time
+
+    def _governor(self, q, hd, L, W, corners, vel, squeeze) -> float:
+        """The speed from which the ego stops behind anything in its strip ahead (``squeeze``
+        (O,) bool: vehicles passed at ``squeeze_speed_mps`` instead)."""
+        nd = np.array([-hd[1], hd[0]])
+        rel = corners - q
+        x = rel @ hd  # (O,4)
+        y = rel @ nd
+        half = 0.5 * W + self.p.gov_margin_m
+        ahead = (y.max(axis=1) >= -half) & (y.min(axis=1) <= half) & (x.max(axis=1) > 0.5 * L)
+        v_squeeze = self.p.squeeze_speed_mps if (ahead & squeeze).any() else np.inf
+        ahead &= ~squeeze
+        if not ahead.any():
+            return v_squeeze
+        gap = np.maximum(x[ahead].min(axis=1) - 0.5 * L, 0.0)
+        v_lead = np.maximum(vel[ahead] @ hd, 0.0)
+        free = np.maximum(gap - self.p.gov_standstill_m, 0.0)
+        return float(min(np.sqrt(v_lead**2 + 2.0 * self.p.gov_decel_mps2 * free).min(), v_squeeze))
+
+    def velocity(self, fld: Field, cruise: float, v_road: float = np.inf) -> np.ndarray:
+        """(s_dot, d_dot) along F at min(cruise, |F| cruise / F_att_max, v_safe, v_road); forward, the
+        direction is kept within ``max_course_deg`` of the road's (the field's sideways pull of a
+        wall its corner touches would otherwise ask a car to turn on the spot)."""
+        F = fld.F[0]
+        mag = np.hypot(*F)
+        if mag < 1e-9:
+            return np.zeros(2)
+        f_max = self.p.k_att * self.p.d_att_m
+        speed = min(cruise, mag * cruise / f_max, fld.v_safe, v_road)
+        course = np.arctan2(F[1], F[0])
+        if F[0] <= 0.0:
+            return speed * np.array([np.cos(course), np.sin(course)])
+        # a car going forward steers at most max_course off the road's direction and moves across
+        # it at most at max_lat_speed: a wall a corner touches must not turn it sideways
+        course = np.clip(course, -self.max_course, self.max_course)
+        v = speed * np.array([np.cos(course), np.sin(course)])
+        v[1] = np.clip(v[1], -self.p.max_lat_speed_mps, self.p.max_lat_speed_mps)
+        return v
+
+    def road_speed(self, view: RoadView, sc: FrenetScene) -> float:
+        return view.curve_speed(sc.s, self.p.curve_lat_accel_mps2, self.p.curve_decel_mps2)
+
+    # --- one step --------------------------------------------------------------------------
+    def act(self, obs: Observation) -> np.ndarray:
+        out = np.zeros((len(obs.ego_ids), 2))
+        for k, (vid, row) in enumerate(zip(obs.ego_ids, obs.ego_rows)):
+            task, view = self.tasks[vid], self.views[vid]
+            sc = self.scene(obs, row, vid)
+            offset, v_lane = view.lane_change(sc, self.lookahead(float(np.hypot(*sc.vel))), self.p.gov_decel_mps2,
+                                            self.step_s)  # the path's lane changes wait for a gap
+            fld = self.field(sc, sc.q[None, :], self.carrot(view, sc, offset))
+            self.last_force[vid] = float(np.hypot(*fld.F[0]))
+            v = self.velocity(fld, task.cruise_speed_mps, min(self.road_speed(view, sc), v_lane))
+            out[k] = view.to_xy_velocity(sc.s, sc.d, v, self.step_s)
+        return out

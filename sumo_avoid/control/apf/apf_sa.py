@@ -1,0 +1,286 @@
+"""``apf_sa``: the potential field of :mod:`.apf` plus simulated-annealing escape (SPEC §2, seed
+001 §2.2, Fig. 2).
+
+Trap detector (documented choice): an ego is *trapped* when, over the last ``trap_window_s``, it
+advanced along its route less than ``trap_progress_frac * cruise * window`` **and** right now
+either the force has almost vanished (``|F| < trap_force_frac * F_att_max``, the field's local
+minimum) or the speed governor holds it below cruise (an obstacle it cannot pass sits in its
+corridor). Both together: a car slowed in a bend is not trapped, a car queued behind a stopped
+obstacle is.
+
+Everything runs in the ego's route frame (s, d), like :mod:`.apf`. Simulated annealing (seed
+Fig. 2) on the field frozen at that instant: from x = the ego's centre (s, d),
+draw x1 = x + step (cos a, sin a) with a uniform; positions whose footprint leaves the lanes of the
+ego's direction are refused; Delta = U(x1) - U(x); accept when Delta <= 0 or exp(-Delta/T) > u (u uniform);
+cool T <- T * ``sa_cooling`` after each draw; stop when the walk is at least ``sa_escape_m`` from
+the trap with a potential below the trap's (it has left the basin), or after ``sa_max_iter``
+draws (then no escape this time, and the next search waits ``trap_window_s`` x 2^(failures in a
+row), at most ``sa_backoff_max_s``; a search costs up to ``sa_max_iter`` field evaluations). A car cannot jump to x1, so the walk's end point becomes an
+*escape target*: the ego follows the reference path shifted sideways by the end point's d
+(e.g. the free lane) until it has held that offset for ``escape_hold_s`` or
+``escape_timeout_s`` has passed; then plain APF resumes.
+"""
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from sumo_avoid.control.apf.apf import ApfController, ApfParams
+from sumo_avoid.control.road_view import FrenetScene, RoadView
+from sumo_avoid.core.config import FieldError, field_doc
+from sumo_avoid.core.geometry import footprint_corners
+from sumo_avoid.core.types import EgoTask, Keys, Observation
+
+
+@dataclass(frozen=True)
+class ApfSaParams(ApfParams):
+    trap_window_s: float = field_doc(2.0, doc="progress is judged over this window, s")
+    trap_progress_frac: float = field_doc(0.7, doc="trapped below this fraction of cruise progress")
+    trap_force_frac: float = field_doc(0.05, doc="|F| below this fraction of F_att_max = a minimum")
+    sa_step_m: float = field_doc(1.0, doc="SA step length, m")
+    sa_t0: float = field_doc(10.0, doc="SA initial temperature (potential units)")
+    sa_cooling: float = field_doc(0.995, doc="SA cooling factor per draw (geometric schedule)")
+    sa_max_iter: int = field_doc(1000, doc="SA draws per escape search (seed: 1000)")
+    sa_escape_m: float = field_doc(3.0, doc="the walk has left the minimum this far from the trap, m")
+    sa_free_ahead_m: float = field_doc(20.0, doc="the walk has left the basin where this much is free ahead along the route, m")
+    sa_backoff_max_s: float = field_doc(16.0, doc="after a search finds no escape the next waits trap_window_s, "
+                                                  "doubled per failure in a row up to this, s (behind a slow truck "
+                                                  "with oncoming traffic, 24 fruitless searches took 3/4 of a run's "
+                                                  "CPU time)")
+    escape_hold_s: float = field_doc(3.0, doc="keep the escape offset this long once reached, s")
+    escape_timeout_s: float = field_doc(10.0, doc="give up an escape after this long without getting "
+                                                  "escape_progress_m closer to its offset or backing up, s")
+    escape_progress_m: float = field_doc(0.5, doc="lateral progress towards the offset that restarts the timeout, m")
+    escape_max_s: float = field_doc(40.0, doc="give up an escape after this long in any case, s")
+    escape_room_m: float = field_doc(12.0, doc="when blocked, back up until this much room (at least the "
+                                               "carrot distance, lookahead_min_m) is free ahead along the route, m")
+    escape_reverse_speed_mps: float = field_doc(1.5, doc="speed while backing up, m/s")
+    reverse_clear_m: float = field_doc(3.0, doc="backing up only while nothing is behind in the ego's strip "
+                                                "nearer than this ...")
+    reverse_clear_s: float = field_doc(3.0, doc="... plus this times the closing speed (the ego backing, the "
+                                                "other driving on), s")
+    escape_margin_m: float = field_doc(0.5, doc="the escape target keeps the car this far from road edges, m")
+
+    def __post_init__(self):
+        if not 0.0 < self.sa_cooling < 1.0:
+            raise FieldError("sa_cooling", "a cooling factor in (0, 1) (T shrinks each draw)", self.sa_cooling)
+
+
+@dataclass
+class _EgoState:
+    history: deque  # (time_s, arc length s_m)
+    escape_offset: float | None = None
+    escape_start_s: float = 0.0
+    escape_clock_s: float = 0.0  # when the escape last got closer to its offset (or was backing up)
+    escape_err_m: float = math.inf  # the smallest |d - offset| so far
+    held_since_s: float | None = None
+    cooldown_until_s: float = -math.inf
+    reversing: bool = False
+    failures: int = 0  # searches in a row that found no escape (the wait before the next doubles)
+
+
+class ApfSaController(ApfController):
+    params_cls = ApfSaParams
+    stats_keys = Keys(("sa_escapes", "sa_failed_searches"))  # what stats() writes
+
+    def __init__(self, params: ApfSaParams, ctx):
+        super().__init__(params, ctx)
+        self.state: dict[str, _EgoState] = {}
+        self.escapes = 0
+        self.failed_searches = 0
+
+    def add_ego(self, task: EgoTask) -> None:
+        super().add_ego(task)
+        self.state[task.vid] = _EgoState(deque())
+
+    def remove_ego(self, vid: str) -> None:
+        super().remove_ego(vid)
+        self.state.pop(vid, None)
+
+    def stats(self) -> dict:
+        return {"sa_escapes": self.escapes, "sa_failed_searches": self.failed_searches}
+
+    def act(self, obs: Observation) -> np.ndarray:
+        p = self.p
+        out = np.zeros((len(obs.ego_ids), 2))
+        f_max = p.k_att * p.d_att_m
+        t = obs.snapshot.time_s
+        # backing up needs a view behind: ground truth, or a rear radar (a front radar alone backed the
+        # ego into the cars behind it on an unseen netgenerate grid, 12 collisions on 2 seeds)
+        sees_behind = obs.detections is None or any(d.mount == "rear" for d in obs.detections)
+        for k, (vid, row) in enumerate(zip(obs.ego_ids, obs.ego_rows)):
+            task, st, view = self.tasks[vid], self.state[vid], self.views[vid]
+            sc = self.scene(obs, row, vid)
+            speed = float(np.hypot(*sc.vel))
+            if st.escape_offset is not None:
+                self._update_escape(st, sc.d, t)
+            st.history.append((t, sc.s))
+            while st.history and st.history[0][0] < t - p.trap_window_s - 1e-9:
+                st.history.popleft()
+            offset, v_lane = view.lane_change(sc, self.lookahead(speed), p.gov_decel_mps2, self.step_s)  # the path's lane changes wait for a gap
+            if st.escape_offset is not None:
+                offset, v_lane = st.escape_offset, np.inf
+            target = self.carrot(view, sc, offset)
+            fld = self.field(sc, sc.q[None, :], target)
+            force = float(np.hypot(*fld.F[0]))
+            v_road = min(self.road_speed(view, sc), v_lane)  # waiting for a gap is not being trapped
+            v_ref = min(task.cruise_speed_mps, v_road)  # a car slowed for a bend is not trapped
+
+            window_full = st.history[-1][0] - st.history[0][0] >= p.trap_window_s - 1e-9
+            progress = st.history[-1][1] - st.history[0][1]
+            slow = progress < p.trap_progress_frac * v_ref * p.trap_window_s
+            stuck_now = (force < p.trap_force_frac * f_max or fld.v_safe < 0.9 * v_ref
+                         or (speed < 0.5 and math.isfinite(fld.v_safe)))
+            if window_full and progress >= p.trap_progress_frac * task.cruise_speed_mps * p.trap_window_s:
+                st.failures = 0  # at cruise progress again (not merely slowed for a bend): a new trap next
+            if (st.escape_offset is None and window_full and slow and stuck_now and t >= st.cooldown_until_s):
+                end = self._anneal(view, sc, target)
+                if end is None:
+                    self.failed_searches += 1
+                    st.cooldown_until_s = t + min(p.trap_window_s * 2.0**st.failures, p.sa_backoff_max_s)
+                    st.failures += 1
+                else:
+                    self.escapes += 1
+                    st.failures = 0
+                    st.escape_offset = self._inside_offset(view, sc, end)
+                    st.escape_start_s = st.escape_clock_s = t
+                    st.held_since_s, st.escape_err_m = None, math.inf
+                    target = self.carrot(view, sc, st.escape_offset)
+                    fld = self.field(sc, sc.q[None, :], target)
+            v = self.velocity(fld, task.cruise_speed_mps, v_road)
+            if st.escape_offset is not None:
+                v = self._make_room(st, sc, v, fld.v_safe, sees_behind)
+            out[k] = view.to_xy_velocity(sc.s, sc.d, v, self.step_s)
+        return out
+
+    def _inside_offset(self, view: RoadView, sc: FrenetScene, end) -> float:
+        """The lateral offset the ego follows after an escape search ended at ``end`` = (s, d).
+
+        The centre of the nearest lane that is as free ahead of the end point as the search
+        demanded (``sa_free_ahead_m``; SPEC §5: the ego keeps to the centre of the lane it chose:
+        an end point between lanes had the ego pass a car 0.48 m apart on overtaking; the nearest
+        centre regardless of what stands in that lane sent it back behind the wall on
+        local_minimum), else the end point's own offset, shrunk until the shifted carrot keeps the
+        car inside its lanes with ``escape_margin_m`` to spare on each side (a target on the kerb
+        is no target)."""
+        offset = float(end[1])
+        need = 0.5 * sc.width + self.p.escape_margin_m
+        s_c = min(sc.s + self.lookahead(float(np.hypot(*sc.vel))), view.length_m)  # the carrot's s
+        lo, hi = (float(v[0]) for v in view.corridor([s_c]))
+        centres = view.lane_centres(s_c)
+        if centres is not None:
+            for c in sorted((float(c) for c in centres), key=lambda c: abs(c - offset)):
+                if (lo + need <= c <= hi - need and self._room_ahead(
+                        sc, at=(float(end[0]), c), heading=0.0) >= self.p.sa_free_ahead_m):
+                    return c
+        for k in range(int(abs(offset) / 0.25) + 1):
+            o = math.copysign(max(abs(offset) - 0.25 * k, 0.0), offset)
+            if lo + need <= o <= hi - need:
+                return o
+        return 0.0
+
+    def _make_room(self, st: _EgoState, sc: FrenetScene, v_des, v_safe: float, sees_behind: bool):
+        """A car cannot step sideways: when the escape is blocked straight ahead (the governor allows
+        no speed) it backs up until ``escape_room_m`` is free on the line towards the escape
+        target, then drives the escape forward. Needs ``actuator.max_reverse_speed_mps > 0``."""
+        if not st.reversing and v_safe < 0.5 and float(np.hypot(*sc.vel)) < 0.3:
+            st.reversing = True
+        if st.reversing:
+            room = self._room_ahead(sc, heading=0.0)
+            if room >= max(self.p.escape_room_m, self.lookahead(0.0)):
+                st.reversing = False
+                return v_des
+            if not (sees_behind and self._clear_behind(sc)):  # never back into traffic, nor blind
+                return np.zeros(2)
+            # back up against the route direction, so the nose straightens while the lateral
+            # offset already won is kept (a three-point manoeuvre rather than undoing the turn)
+            fwd = np.array([math.cos(sc.heading), math.sin(sc.heading)])
+            back = np.array([-1.0, 0.0]) if fwd[0] > 0.0 else -fwd
+            return self.p.escape_reverse_speed_mps * back
+        return v_des
+
+    def _strip(self, sc: FrenetScene, pos, heading: float):
+        """The other vehicles against a strip of half width W/2 + ``gov_margin_m`` through ``pos``
+        (s, d) along ``heading``: their corners' positions along it (O, 4), m, and which of them
+        reach into it across (O,)."""
+        hd = np.array([math.cos(heading), math.sin(heading)])
+        rel = footprint_corners(sc.o_pos, sc.o_heading, sc.o_length, sc.o_width) - pos
+        x, y = rel @ hd, rel @ np.array([-hd[1], hd[0]])
+        half = 0.5 * sc.width + self.p.gov_margin_m
+        return x, (y.max(axis=1) >= -half) & (y.min(axis=1) <= half)
+
+    def _room_ahead(self, sc: FrenetScene, at=None, heading=None) -> float:
+        """Free length ahead of the ego's footprint (placed at ``at`` with ``heading``, in (s, d)), m."""
+        if not len(sc.o_pos):
+            return math.inf
+        x, in_strip = self._strip(sc, sc.q if at is None else np.asarray(at, float),
+                                  sc.heading if heading is None else heading)
+        ahead = in_strip & (x.max(axis=1) > 0)
+        if not ahead.any():
+            return math.inf
+        return float(max(x[ahead].min(), 0.0) - 0.5 * sc.length)
+
+    def _clear_behind(self, sc: FrenetScene) -> bool:
+        """May the ego back up? No vehicle in its road-aligned strip behind it nearer, bumper to
+        bumper, than ``reverse_clear_m`` + ``reverse_clear_s`` x the speed at which the two close
+        (the ego backing at ``escape_reverse_speed_mps``, the other driving on: SUMO's drivers do not
+        expect a car to come back at them; on a netgenerate grid with randomTrips traffic an ego
+        backed up 50 m of a three-lane road into the cars queueing behind it, 8 collisions)."""
+        if not len(sc.o_pos):
+            return True
+        x, in_strip = self._strip(sc, sc.q, 0.0)
+        behind = in_strip & (x.min(axis=1) < 0.0)
+        gap = -x.max(axis=1) - 0.5 * sc.length
+        closing = np.maximum(sc.o_vel[:, 0], 0.0) + self.p.escape_reverse_speed_mps
+        return not (behind & (gap < self.p.reverse_clear_m + self.p.reverse_clear_s * closing)).any()
+
+    def _update_escape(self, st: _EgoState, d: float, t: float) -> None:
+        """An escape ends once its offset has been held ``escape_hold_s``, or after
+        ``escape_timeout_s`` in which it neither got ``escape_progress_m`` closer to the offset
+        nor backed up (a three-point manoeuvre gains its offset in steps, backing up in between),
+        and in any case after ``escape_max_s``."""
+        p = self.p
+        err = abs(d - st.escape_offset)
+        if err < 1.0:
+            st.held_since_s = t if st.held_since_s is None else st.held_since_s
+        if st.reversing or err <= st.escape_err_m - p.escape_progress_m:
+            st.escape_clock_s = t
+            st.escape_err_m = min(err, st.escape_err_m)
+        if (t - st.escape_clock_s >= p.escape_timeout_s or t - st.escape_start_s >= p.escape_max_s
+                or (st.held_since_s is not None and t - st.held_since_s >= p.escape_hold_s)):
+            st.escape_offset, st.held_since_s, st.reversing = None, None, False
+            st.history.clear()
+            st.cooldown_until_s = t + p.trap_window_s
+
+    def _outside(self, view: RoadView, x1, L: float, W: float) -> bool:
+        """Does a route-aligned footprint at (s, d) = x1 stick out of the ego's lanes?"""
+        c = footprint_corners(x1[None, :], np.zeros(1), np.array([L]), np.array([W]))[0]
+        lo, hi = view.corridor(c[:, 0])
+        return bool(((c[:, 1] < lo - 1e-9) | (c[:, 1] > hi + 1e-9)).any())
+
+    def _anneal(self, view: RoadView, sc: FrenetScene, target):
+        """Seed Fig. 2 on the frozen field, in (s, d); returns the escape point or None."""
+        p, rng = self.p, self.rng
+        x0 = sc.q
+        # candidate footprints are aligned with the route (where the car would end up driving),
+        # not with its momentary heading, which may point at the kerb after a manoeuvre
+        U0 = float(self.field(sc, x0[None, :], target, heading=0.0).U[0])
+        x, Ux, T = x0.copy(), U0, p.sa_t0
+        for _ in range(p.sa_max_iter):
+            a = rng.uniform(0.0, 2.0 * math.pi)
+            x1 = x + p.sa_step_m * np.array([math.cos(a), math.sin(a)])
+            if self._outside(view, x1, sc.length, sc.width):
+                T *= p.sa_cooling
+                continue
+            U1 = float(self.field(sc, x1[None, :], target, heading=0.0).U[0])
+            delta = U1 - Ux
+            if delta <= 0.0 or math.exp(-delta / max(T, 1e-12)) > rng.uniform():
+                x, Ux = x1, U1
+            T *= p.sa_cooling
+            if (Ux < U0 and np.hypot(*(x - x0)) >= p.sa_escape_m
+                    and self._room_ahead(sc, at=x, heading=0.0) >= p.sa_free_ahead_m):
+                return x
+        return None

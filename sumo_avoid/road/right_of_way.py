@@ -1,0 +1,151 @@
+"""Right of way at junctions, read once from the net's junction logic (``<request response=...>``
+through :mod:`sumolib`): for a link of an ego's route, the links that have priority over it and
+where their vehicles come from.
+
+A foe link F has priority over the ego's link E when the junction's response for E has F's bit set
+(``sumolib.net.node.Node.forbids(F, E)``): the major road over a minor one, the ring over a
+roundabout entry, right before left at an equal junction, the oncoming straight over a permissive
+left turn. The conflict point is where the two links' internal-lane chains first cross (along F);
+links that merge without crossing conflict at the end of F's chain (the merge).
+
+For F, :attr:`~sumo_avoid.road.route.FoeLink.approach` lists every lane a vehicle can be on while
+it is heading for the conflict point, each with the distance from that lane's start to the point
+along the way (SUMO lane lengths, so that SUMO's lane position gives the distance directly):
+F's internal lanes up to the conflict, F's incoming lane, and the lanes upstream of it (internal
+lanes of the junctions before included, so a roundabout's ring is followed back through its
+junctions) up to ``horizon_m`` before F's stop line.
+
+An *unregulated* junction has no junction logic (SUMO's drivers go through without looking; SUMO
+checks no collisions there): every link from another edge whose chain crosses the ego's, or ends
+in the same lane, is a foe, and the ego's link counts as equal ('=', :func:`link_state`): it gives
+way to all of them (on a netgenerate spider net, where the centre is unregulated, the ego drove
+into a car crossing it).
+"""
+from __future__ import annotations
+
+from shapely.geometry import LineString, Point
+
+from sumo_avoid.road.route import FoeLink
+
+#: SUMO's junction type without right of way (netgenerate leaves e.g. a spider net's centre so).
+UNREGULATED = "unregulated"
+
+
+class RightOfWay:
+    """The junction logic of one sumolib net (read with ``withInternal=True``, foes on)."""
+
+    def __init__(self, net, horizon_m: float = 120.0):
+        self.net = net
+        self.horizon_m = horizon_m
+
+    def via_chain(self, conn) -> list:
+        """The internal lanes (sumolib lanes) a connection runs over, in order (one or several)."""
+        out, via, target = [], conn.getViaLaneID(), conn.getToLane().getID()
+        while via and len(out) < 32:
+            lane = self.net.getLane(via)
+            out.append(lane)
+            outs = lane.getOutgoing()
+            nxt = next((c for c in outs if c.getToLane().getID() == target), outs[0] if outs else None)
+            via = "" if nxt is None else nxt.getViaLaneID()
+            if nxt is not None and not via and nxt.getToLane().getID().startswith(":"):
+                via = nxt.getToLane().getID()
+        return out
+
+    def foes(self, conn) -> tuple[FoeLink, ...]:
+        """The links with priority over ``conn`` (a sumolib connection between normal lanes); at an
+        unregulated junction every link from another edge that crosses or merges with it."""
+        node = conn.getFrom().getToNode()
+        mine = self.via_chain(conn)
+        if node.getType() == UNREGULATED:
+            line, target = _chain_line(mine), conn.getToLane().getID()
+            others = ((o, self.via_chain(o)) for o in node.getConnections() if o.getFrom() is not conn.getFrom()
+                      and not o.getFromLane().getID().startswith(":"))
+            return tuple(self._foe(o, chain, mine) for o, chain in others
+                         if o.getToLane().getID() == target or _crosses(_chain_line(chain), line))
+        if not _has_logic(node):
+            return ()
+        return tuple(self._foe(other, self.via_chain(other), mine) for other in node.getConnections()
+                     if other is not conn and not other.getFromLane().getID().startswith(":") and node.forbids(other, conn))
+
+    def gives_way_to(self, lane, conn) -> bool:
+        """Does one of the links from ``lane`` (a sumolib lane into ``conn``'s junction) give way to
+        ``conn``? (At an unregulated junction nobody gives way.)"""
+        node = conn.getFrom().getToNode()
+        if node.getType() == UNREGULATED or not _has_logic(node):
+            return False
+        return any(node.forbids(conn, other) for other in lane.getOutgoing())
+
+    def _foe(self, other, chain, mine) -> FoeLink:
+        """``other`` (its internal lanes ``chain``) as a foe of the link whose internal lanes are ``mine``."""
+        approach: dict[str, float] = {}
+        conflict = _conflict_offset(chain, mine)
+        acc = 0.0
+        for ln in chain:  # internal lanes up to the conflict point
+            if acc > conflict:
+                break
+            approach[ln.getID()] = conflict - acc
+            acc += ln.getLength()
+        self._upstream(other.getFromLane(), conflict + other.getFromLane().getLength(), approach)
+        tls = other.getTLSID() or ""
+        return FoeLink(tls, int(other.getTLLinkIndex()) if tls else -1, other.getState() or "",
+                       other.getDirection() or "", tuple(sorted(approach.items())), float(conflict))
+
+    def _upstream(self, lane, offset_m: float, out: dict) -> None:
+        """Add ``lane`` (conflict ``offset_m`` from its start) and the lanes feeding it, back to
+        ``horizon_m`` before the conflict (each lane once, at its smallest offset)."""
+        todo = [(lane, offset_m)]
+        while todo:
+            ln, off = todo.pop()
+            lid = ln.getID()
+            if lid in out and out[lid] <= off:
+                continue
+            out[lid] = off
+            if off - ln.getLength() > self.horizon_m:
+                continue
+            for conn in ln.getIncomingConnections():
+                src = conn.getFromLane()
+                if src.getID().startswith(":"):  # internal lane feeding this one directly
+                    todo.append((src, off + src.getLength()))
+                    continue
+                acc = off
+                for v in reversed(self.via_chain(conn)):
+                    acc += v.getLength()
+                    if out.get(v.getID(), float("inf")) > acc:
+                        out[v.getID()] = acc
+                todo.append((src, acc + src.getLength()))
+
+
+def link_state(conn) -> str:
+    """The right of way of a connection for the ego: the net's state ('M', 'm', '=', ...), except at
+    an unregulated junction, where SUMO gives every link 'M' and nobody yields (its drivers go
+    through; it checks no collisions there): '=', the ego gives way to every crossing link
+    (:meth:`RightOfWay.foes`)."""
+    return "=" if conn.getFrom().getToNode().getType() == UNREGULATED else (conn.getState() or "")
+
+
+def _has_logic(node) -> bool:
+    """Whether sumolib read a junction logic (``<request>`` rows) for ``node``."""
+    return bool(getattr(node, "_prohibits", None))
+
+
+def _crosses(a: LineString | None, b: LineString | None) -> bool:
+    return a is not None and b is not None and a.intersects(b)
+
+
+def _chain_line(lanes) -> LineString | None:
+    pts = [p for ln in lanes for p in ln.getShape()]
+    return LineString(pts) if len(pts) >= 2 else None
+
+
+def _conflict_offset(foe_lanes, ego_lanes) -> float:
+    """Distance along the foe's internal lanes (SUMO lengths) from their start to the first point
+    where they cross the ego's (their whole length if they only merge)."""
+    total = float(sum(ln.getLength() for ln in foe_lanes))
+    f, e = _chain_line(foe_lanes), _chain_line(ego_lanes)
+    if f is None or e is None or f.length <= 0:
+        return total
+    hit = f.intersection(e)
+    if hit.is_empty:
+        return total
+    pts = [Point(c) for g in getattr(hit, "geoms", [hit]) for c in g.coords]
+    return total * min(1.0, min(f.project(p) for p in pts) / f.length)  # geometric -> SUMO length

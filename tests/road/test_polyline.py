@@ -1,0 +1,60 @@
+import numpy as np
+import pytest
+
+from sumo_avoid.road.polyline import polyline_project_many, polyline_track
+
+U_TURN = np.array([[0.0, 0.0], [100.0, 0.0], [100.0, 3.0], [0.0, 3.0]])  # out along y=0, back along y=3
+
+
+def test_projection_of_many_points():
+    s = polyline_project_many(U_TURN, [[50.0, 0.5], [100.5, 1.0], [20.0, 2.9]])
+    assert np.allclose(s, [50.0, 101.0, 183.0])
+
+
+def test_tracking_follows_the_branch_a_global_projection_would_skip():
+    pts = [[40.0, 0.2], [50.0, 2.0], [60.0, 2.0], [99.0, 1.5], [80.0, 2.8]]
+    assert polyline_project_many(U_TURN, pts[1:2])[0] == 153.0  # nearest point: the way back, y = 3
+    s = polyline_track(U_TURN, pts)
+    assert np.allclose(s, [40.0, 50.0, 60.0, 99.0, 123.0])  # 99: on the way out; 80 m back: 103 + 20
+    assert np.allclose(polyline_track(U_TURN, [[50.0, 2.0]], s_start=150.0), [153.0])
+
+
+def _track_point_by_point(path, points, s_start=None, window_m=30.0):
+    """polyline_track as it was before it was vectorised: one projection per point on its window."""
+    p = np.asarray(path, float)
+    cum = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(p, axis=0).T))])
+    out, prev = np.zeros(len(points)), s_start
+    for i, point in enumerate(np.asarray(points, float)):
+        if prev is None:
+            prev = float(polyline_project_many(p, point[None])[0])
+        else:
+            lo = max(0, int(np.searchsorted(cum, prev - window_m, side="right")) - 1)
+            hi = min(len(p), int(np.searchsorted(cum, prev + window_m, side="left")) + 1)
+            prev = float(cum[lo] + polyline_project_many(p[lo:hi], point[None])[0])
+        out[i] = prev
+    return out
+
+
+def test_tracking_gives_the_floats_of_a_projection_per_point():
+    # random walks along random paths (some with a repeated vertex), windows narrower and wider than
+    # a segment, with and without a start: the same floats, bit for bit
+    rng = np.random.default_rng(7)
+    for trial in range(12):
+        n_vertices = int(rng.integers(2, 120))
+        path = np.cumsum(rng.normal(0.0, rng.uniform(0.5, 20.0), (n_vertices, 2)), axis=0)
+        if trial % 4 == 0:
+            path[1] = path[0]
+        along = np.clip(np.cumsum(rng.integers(-1, 3, 30)), 0, n_vertices - 1)
+        pts = path[along] + rng.normal(0.0, 3.0, (30, 2))
+        start = None if trial % 3 else float(rng.uniform(0.0, 20.0))
+        for window in (30.0, 2.0, 500.0, 0.0):  # 0: windows of one vertex, or none (both raise then)
+            for q in (pts, pts[:1]):
+                try:
+                    ref = _track_point_by_point(path, q, start, window).tobytes()
+                except ValueError:
+                    with pytest.raises(ValueError, match="empty polyline"):
+                        polyline_track(path, q, start, window)
+                    continue
+                assert polyline_track(path, q, start, window).tobytes() == ref
+    assert polyline_track([[1.0, 2.0]], [[5.0, 5.0], [6.0, 6.0]]).tolist() == [0.0, 0.0]  # a one-vertex path
+    assert polyline_track(U_TURN, np.zeros((0, 2))).shape == (0,)
