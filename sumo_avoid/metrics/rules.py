@@ -29,7 +29,7 @@ from sumo_avoid.road.polyline import polyline_track
 from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.rollout.result import RunResult
-from sumo_avoid.safety.traffic import RED, STOP_SIGNS
+from sumo_avoid.road.regulation import RED, STOP_SIGNS
 from sumo_avoid.road.yielding import (
     can_give_way,
     critical_gap_s,

@@ -1,0 +1,39 @@
+"""The rules of the road as the plug-in judges them (SPEC §5): which signal states are red, which
+links are stop signs, and the parameters of the traffic rules -- comfortable braking, critical gaps,
+stop-sign standing -- shared by the traffic-rules layer (``safety/traffic.py``, which obeys them) and
+the rule metrics (``metrics/rules.py``, which measure them from the recording, also in runs
+without the layer)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from sumo_avoid.core.config import field_doc
+
+RED = frozenset("ru")
+STOP_SIGNS = frozenset("sw")  # stop sign, all-way stop: stand at the line, then give way
+
+
+@dataclass(frozen=True)
+class RulesParams:
+    comfort_decel_mps2: float = field_doc(3.0, positive=True, doc="b_comf: comfortable braking for signals "
+                                                                   "and the road ahead, m/s^2 (SPEC §5)")
+    stop_margin_m: float = field_doc(1.0, doc="stop the front bumper this far before a stop line, m")
+    speed_factor: float | None = field_doc(None, positive=True,
+                                           doc="lane speed limit x this = highest speed; default: not enforced "
+                                               "(docs: enforcing it stalls APF-SA on left_turn today)")
+    lookahead_m: float = field_doc(250.0, positive=True, doc="signals and speed limits this far ahead count, m")
+    critical_gap_s: float = field_doc(4.5, positive=True, doc="t_c: a foe with priority must arrive at the conflict "
+                                                               "point at least this long after the ego reaches the "
+                                                               "line (straight, right, merges; s)")
+    critical_gap_left_s: float = field_doc(5.0, positive=True, doc="t_c of left turns and U-turns, s")
+    gap_margin_s: float = field_doc(0.5, doc="the layer accepts a gap only this much longer than t_c (foes may "
+                                             "speed up; the metric judges against t_c), s")
+    commit_decel_mps2: float = field_doc(6.0, positive=True, doc="an ego that could stop before a yield line only "
+                                                                  "braking harder than this goes on, m/s^2")
+    stop_speed_mps: float = field_doc(0.1, positive=True, doc="at a stop sign ('s' / 'w' links) the ego stands "
+                                                               "(slower than this) before it goes on, m/s")
+    stop_zone_m: float = field_doc(3.0, positive=True, doc="... with its front at most this far before the stop "
+                                                            "position (stop_margin_m before the line), m")
+    zipper_headway_s: float = field_doc(1.0, positive=True, doc="t_c of a zipper merge ('Z' links): the ego enters "
+                                                                 "at least this long after and before the foes "
+                                                                 "(accepted freeway-merge lead/lag gaps are ~1 s), s")
