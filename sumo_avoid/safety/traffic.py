@@ -48,7 +48,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from sumo_avoid.core.config import field_doc
 from sumo_avoid.road.polyline import polyline_track
 from sumo_avoid.road.regulation import RED, STOP_SIGNS, RulesParams
 from sumo_avoid.core.types import EgoTask, Keys
