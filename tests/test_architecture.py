@@ -23,9 +23,21 @@ def _modules() -> dict[str, pathlib.Path]:
     return out
 
 
-def _imports(tree: ast.AST, mods: dict) -> set[str]:
-    found = set()
+def _type_only(tree: ast.AST) -> set[int]:
+    """ids of the import nodes under ``if TYPE_CHECKING:`` (annotations only: no runtime dependency)."""
+    out = set()
     for node in ast.walk(tree):
+        if isinstance(node, ast.If) and isinstance(node.test, ast.Name) and node.test.id == "TYPE_CHECKING":
+            out |= {id(sub) for stmt in node.body for sub in ast.walk(stmt)}
+    return out
+
+
+def _imports(tree: ast.AST, mods: dict, runtime_only: bool = False) -> set[str]:
+    found = set()
+    skip = _type_only(tree) if runtime_only else set()
+    for node in ast.walk(tree):
+        if id(node) in skip:
+            continue
         if isinstance(node, ast.Import):
             found |= {a.name for a in node.names if a.name in mods}
         elif isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("sumo_avoid"):
@@ -36,9 +48,50 @@ def _imports(tree: ast.AST, mods: dict) -> set[str]:
     return found
 
 
-def import_graph() -> dict[str, set[str]]:
+def import_graph(runtime_only: bool = False) -> dict[str, set[str]]:
     mods = _modules()
-    return {m: _imports(ast.parse(f.read_text()), mods) - {m} for m, f in mods.items()}
+    return {m: _imports(ast.parse(f.read_text()), mods, runtime_only) - {m} for m, f in mods.items()}
+
+
+# The order of the packages, lowest first: a module may import its own package and packages of lower
+# levels, never a higher one nor another package of its own level. Imports under ``if TYPE_CHECKING:``
+# are annotations only and not counted (core's contracts name the road's types that way).
+ORDER = (
+    ("core",),  # contracts, config, generic geometry: no road, no SUMO
+    ("road",),  # the net as data (read with sumolib), route records, Frenet frame, right of way, rules of the road
+    ("sumo",),  # libsumo: the simulation, its devices and inputs
+    ("sensing",),
+    ("safety", "actuation", "planning"),
+    ("control",),
+    ("rollout",),  # the loop, ego book-keeping, the recording
+    ("metrics",),  # from the recording and the road only
+    ("plots",),
+    ("scenario",),
+    ("runs",),  # one run: runner, outputs, child processes
+    ("studies",),
+    ("cli",),
+)
+LEVEL = {pkg: i for i, pkgs in enumerate(ORDER) for pkg in pkgs}
+
+
+def package_of(module: str) -> str | None:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else None
+
+
+def order_violations(graph: dict[str, set[str]]) -> list[str]:
+    bad = []
+    for m, deps in sorted(graph.items()):
+        pm = package_of(m)
+        for d in sorted(deps):
+            pd = package_of(d)
+            if pm is None or pd is None or pm == pd:
+                continue
+            if pm not in LEVEL or pd not in LEVEL:
+                bad.append(f"{m} -> {d}: package not in ORDER")
+            elif LEVEL[pd] >= LEVEL[pm]:
+                bad.append(f"{m} -> {d}")
+    return bad
 
 
 def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
@@ -74,6 +127,30 @@ def test_find_cycle_sees_a_cycle_and_a_dag():
 
 def test_the_package_import_graph_is_acyclic():
     assert find_cycle(import_graph()) is None
+
+
+def test_order_violations_sees_an_import_upwards_and_across():
+    graph = {"sumo_avoid.core.a": {"sumo_avoid.road.b"}, "sumo_avoid.safety.c": {"sumo_avoid.planning.d"},
+             "sumo_avoid.metrics.e": {"sumo_avoid.road.f", "sumo_avoid.metrics.g"}}
+    assert order_violations(graph) == ["sumo_avoid.core.a -> sumo_avoid.road.b",
+                                       "sumo_avoid.safety.c -> sumo_avoid.planning.d"]
+
+
+def test_every_package_is_in_the_order():
+    packages = {d.name for d in PKG.iterdir() if (d / "__init__.py").exists()} | {"cli"}
+    assert packages == set(LEVEL)
+
+
+def test_packages_import_only_lower_packages():
+    assert order_violations(import_graph(runtime_only=True)) == []
+
+
+def test_no_module_basename_in_two_packages():
+    seen: dict[str, list[str]] = {}
+    for f in PKG.rglob("*.py"):
+        if f.name != "__init__.py":
+            seen.setdefault(f.name, []).append(str(f.relative_to(PKG)))
+    assert {n: p for n, p in seen.items() if len(p) > 1} == {}
 
 
 def test_imports_inside_functions_only_for_optional_dependencies():
