@@ -30,8 +30,9 @@ from sumo_avoid.road.polyline import (
     polyline_point_at,
     polyline_project,
 )
-from sumo_avoid.road.route import LanePiece, OncomingLane, RouteLink
+from sumo_avoid.road.elements import read_elements
 from sumo_avoid.road.lane_index import LaneIndex
+from sumo_avoid.road.route import LanePiece, OncomingLane, RouteLink
 from sumo_avoid.road.right_of_way import RightOfWay, link_state
 
 
@@ -114,6 +115,7 @@ class Road:
         s = object.__setattr__
         s(self, "source", source)
         s(self, "_net", net)
+        s(self, "elements", read_elements(net))  # lanes with permissions, junctions, crossings, walking areas
         lanes = [ln for e in net.getEdges(withInternal=True) for ln in e.getLanes()]
         polys = []
         for ln in lanes:
