@@ -54,11 +54,23 @@ class FieldError(ValueError):
 
 
 def field_doc(default=dataclasses.MISSING, *, doc: str = "", signed: bool = False, positive: bool = False,
-              nonempty: bool = False, **kw):
+              nonempty: bool = False, inline: bool = False, **kw):
     """A dataclass field with a docstring (units!) and its constraints: negative numbers allowed
-    (``signed``), strictly positive (``positive``), a non-empty string or list (``nonempty``)."""
+    (``signed``), strictly positive (``positive``), a non-empty string or list (``nonempty``).
+    ``inline``: a dataclass field whose keys are read from the enclosing table itself, not from a
+    sub-table (a parameter set composed of another's keys and its own: ``[controllers.apf_sa]``)."""
     return dataclasses.field(default=default, metadata={"doc": doc, "signed": signed, "positive": positive,
-                                                        "nonempty": nonempty}, **kw)
+                                                        "nonempty": nonempty, "inline": inline}, **kw)
+
+
+def _inline(f: dataclasses.Field) -> bool:
+    return bool(f.metadata.get("inline"))
+
+
+def table_keys(cls) -> list[str]:
+    """The keys of the table of config dataclass ``cls`` (an inline field's keys in its place)."""
+    hints = typing.get_type_hints(cls)
+    return [k for f in dataclasses.fields(cls) for k in (table_keys(hints[f.name]) if _inline(f) else [f.name])]
 
 
 _NO_CONSTRAINTS = {"signed": False, "positive": False, "nonempty": False}
@@ -150,14 +162,18 @@ def build(cls, data, file: str, prefix: str = ""):
         raise ScenarioError(file, where, "a table", data)
     hints = typing.get_type_hints(cls)
     fields = {f.name: f for f in dataclasses.fields(cls)}
-    unknown = sorted(set(data) - set(fields))
+    known = table_keys(cls)
+    unknown = sorted(set(data) - set(known))
     if unknown:
         key = f"{prefix}.{unknown[0]}" if prefix else unknown[0]
-        raise ScenarioError(file, key, f"one of the known keys {sorted(fields)}", unknown[0], show_got=False)
+        raise ScenarioError(file, key, f"one of the known keys {sorted(known)}", unknown[0], show_got=False)
     kwargs = {}
     for name, f in fields.items():
         key = f"{prefix}.{name}" if prefix else name
-        if name in data:
+        if _inline(f):
+            own = set(table_keys(hints[name]))
+            kwargs[name] = build(hints[name], {k: v for k, v in data.items() if k in own}, file, prefix)
+        elif name in data:
             kwargs[name] = _coerce(data[name], hints[name], file, key, {**_NO_CONSTRAINTS, **f.metadata})
         elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
             raise ScenarioError(file, key, f"a value ({_type_name(hints[name])}); the key is required",
@@ -181,7 +197,7 @@ def describe(cls, prefix: str = "") -> list[tuple[str, str, str, str]]:
         key = f"{prefix}.{f.name}" if prefix else f.name
         tp = hints[f.name]
         if dataclasses.is_dataclass(tp):
-            rows += describe(tp, key)
+            rows += describe(tp, prefix if _inline(f) else key)
             continue
         if f.default is not dataclasses.MISSING:
             default = repr(f.default)

@@ -51,15 +51,15 @@ def _waiting_car_scene(o_vel_d=0.0, lo=-2.35):
                        lambda s: (np.full(len(s), lo), np.full(len(s), 2.35)))
 
 
-def _controller():
-    from sumo_avoid.control.apf.apf import ApfController, ApfParams
-    from sumo_avoid.rollout.assemble import Context
+def _driver():
+    from sumo_avoid.control.apf.apf import ApfDriver, ApfParams
+    from sumo_avoid.core.interfaces import Context
 
-    return ApfController(ApfParams(), Context(seed=1, step_s=0.1))
+    return ApfDriver(ApfParams(), Context(seed=1, step_s=0.1))
 
 
 def test_a_standing_car_the_ego_can_steer_clear_of_is_passed_at_a_crawl():
-    ctl, sc = _controller(), _waiting_car_scene()
+    ctl, sc = _driver(), _waiting_car_scene()
     fld = ctl.field(sc, sc.q[None], np.array([185.2, 0.0]))
     assert fld.v_safe == ctl.p.squeeze_speed_mps  # 2 m/s, not a standstill
     assert fld.F[0, 0] > 0.0 and fld.F[0, 1] < 0.0  # on, and away from it (right)
@@ -67,7 +67,7 @@ def test_a_standing_car_the_ego_can_steer_clear_of_is_passed_at_a_crawl():
 
 @pytest.mark.parametrize("case", ["closing across the road", "no room on the other side"])
 def test_a_car_the_ego_cannot_steer_clear_of_still_blocks(case):
-    ctl = _controller()
+    ctl = _driver()
     sc = _waiting_car_scene(o_vel_d=-0.5) if case.startswith("closing") else _waiting_car_scene(lo=-0.5)  # 0.46 - 0.206 - 0.9 = -0.646 < -0.5
     fld = ctl.field(sc, sc.q[None], np.array([185.2, 0.0]))
     assert fld.v_safe == 0.0 and fld.F[0, 0] < 0.0

@@ -74,3 +74,22 @@ def test_backing_up_waits_for_the_traffic_behind(ctl):
     assert ctl._clear_behind(_scene_behind(23.0, 5.0))
     # in the next lane (d 3.5: its side at 2.6 > 0.9 + 0.4 from the ego's centre line) it does not count
     assert ctl._clear_behind(_scene_behind(2.0, 5.0, d_o=3.5))
+
+
+def test_the_field_keys_sit_in_the_apf_sa_table_itself_and_reach_its_driver():
+    """ApfSaParams holds ApfParams as an inline field: [controllers.apf_sa] takes APF's keys beside
+    its own (no sub-table), they are documented under controllers.apf_sa, and the APF driver it
+    delegates to drives with them."""
+    from sumo_avoid.control.apf.apf import ApfParams
+    from sumo_avoid.core.config import ScenarioError, build, describe
+
+    p = build(ApfSaParams, {"k_rep": 5.0, "sa_t0": 3.0}, "s.toml", "controllers.apf_sa")
+    assert p.apf == ApfParams(k_rep=5.0) and p.sa_t0 == 3.0
+    assert ApfSaController(p, Context(seed=1, step_s=0.1)).driver.p is p.apf
+    with pytest.raises(ScenarioError, match=r"'controllers.apf_sa.apf': expected one of the known keys \['curve_decel"):
+        build(ApfSaParams, {"apf": {}}, "s.toml", "controllers.apf_sa")
+    with pytest.raises(ScenarioError, match=r"'controllers.apf_sa.k_rep': expected a non-negative number"):
+        build(ApfSaParams, {"k_rep": -1.0}, "s.toml", "controllers.apf_sa")
+    rows = describe(ApfSaParams, "controllers.apf_sa")
+    apf = [r[0].replace("controllers.apf.", "controllers.apf_sa.") for r in describe(ApfParams, "controllers.apf")]
+    assert [r[0] for r in rows[:len(apf)]] == apf and rows[len(apf)][0] == "controllers.apf_sa.trap_window_s"

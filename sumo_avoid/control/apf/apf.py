@@ -38,13 +38,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sumo_avoid.control.base import BaseController
 from sumo_avoid.control.road_view import FrenetScene, RoadView
 from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.geometry import (
     convex_distance,
     footprint_corners,
 )
-from sumo_avoid.core.types import EgoTask, Keys, Needs, Observation
+from sumo_avoid.core.types import EgoTask, Observation
 
 
 @dataclass(frozen=True)
@@ -114,36 +115,24 @@ def _unit(v):
     return v / np.maximum(n, 1e-12)[..., None], n
 
 
-class ApfController:
-    """Plain potential field (no escape from local minima), in each ego's route frame."""
-
-    needs = Needs(goals=True)
-    metrics = ()  # metrics of its own beside the standard set
-    stats_keys = Keys()  # what stats() writes: nothing
+class ApfDriver:
+    """The APF road field for the egos it is given (each in its route frame, a
+    :class:`~sumo_avoid.control.road_view.RoadView` per ego): the carrot, the field, the speed
+    governor and the commanded velocity. Driven by :class:`ApfController`, APF-SA
+    (:mod:`.apf_sa`) and the formation's members on a road (:mod:`sumo_avoid.control.formation.lane_plan`)."""
 
     def __init__(self, params: ApfParams, ctx):
         self.p = params
         self.max_course = np.radians(params.max_course_deg)
-        self.rng = ctx.rng()
         self.step_s = float(ctx.step_s)
         self.steering = (float(ctx.turn_radius_m), float(ctx.yaw_rate_radps))  # the drivable line, the speed in turns (RoadView)
-        self.tasks: dict[str, EgoTask] = {}
         self.views: dict[str, RoadView] = {}
-        self.last_force: dict[str, float] = {}
 
     def add_ego(self, task: EgoTask) -> None:
-        self.tasks[task.vid] = task
         self.views[task.vid] = RoadView(task, *self.steering)
 
     def remove_ego(self, vid: str) -> None:
-        self.tasks.pop(vid, None)
         self.views.pop(vid, None)
-
-    def stats(self) -> dict:
-        return {}
-
-    def tables(self) -> dict:
-        return {}
 
     # --- targets (Frenet) ------------------------------------------------------------------
     def lookahead(self, speed: float) -> float:
@@ -293,16 +282,30 @@ class ApfController:
     def road_speed(self, view: RoadView, sc: FrenetScene) -> float:
         return view.curve_speed(sc.s, self.p.curve_lat_accel_mps2, self.p.curve_decel_mps2)
 
-    # --- one step --------------------------------------------------------------------------
+class ApfController(BaseController):
+    """Plain potential field (no escape from local minima), in each ego's route frame."""
+
+    def __init__(self, params: ApfParams, ctx):
+        super().__init__(params, ctx)
+        self.driver = ApfDriver(params, ctx)
+
+    def add_ego(self, task: EgoTask) -> None:
+        super().add_ego(task)
+        self.driver.add_ego(task)
+
+    def remove_ego(self, vid: str) -> None:
+        super().remove_ego(vid)
+        self.driver.remove_ego(vid)
+
     def act(self, obs: Observation) -> np.ndarray:
+        drv = self.driver
         out = np.zeros((len(obs.ego_ids), 2))
         for k, (vid, row) in enumerate(zip(obs.ego_ids, obs.ego_rows)):
-            task, view = self.tasks[vid], self.views[vid]
-            sc = self.scene(obs, row, vid)
-            offset, v_lane = view.lane_change(sc, self.lookahead(float(np.hypot(*sc.vel))), self.p.gov_decel_mps2,
-                                            self.step_s)  # the path's lane changes wait for a gap
-            fld = self.field(sc, sc.q[None, :], self.carrot(view, sc, offset))
-            self.last_force[vid] = float(np.hypot(*fld.F[0]))
-            v = self.velocity(fld, task.cruise_speed_mps, min(self.road_speed(view, sc), v_lane))
-            out[k] = view.to_xy_velocity(sc.s, sc.d, v, self.step_s)
+            task, view = self.tasks[vid], drv.views[vid]
+            sc = drv.scene(obs, row, vid)
+            offset, v_lane = view.lane_change(sc, drv.lookahead(float(np.hypot(*sc.vel))), self.p.gov_decel_mps2,
+                                              drv.step_s)  # the path's lane changes wait for a gap
+            fld = drv.field(sc, sc.q[None, :], drv.carrot(view, sc, offset))
+            v = drv.velocity(fld, task.cruise_speed_mps, min(drv.road_speed(view, sc), v_lane))
+            out[k] = view.to_xy_velocity(sc.s, sc.d, v, drv.step_s)
         return out

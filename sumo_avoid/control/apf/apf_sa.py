@@ -28,7 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sumo_avoid.control.apf.apf import ApfController, ApfParams
+from sumo_avoid.control.apf.apf import ApfDriver, ApfParams
+from sumo_avoid.control.base import BaseController
 from sumo_avoid.control.road_view import FrenetScene, RoadView
 from sumo_avoid.core.config import FieldError, field_doc
 from sumo_avoid.core.geometry import footprint_corners
@@ -36,7 +37,11 @@ from sumo_avoid.core.types import EgoTask, Keys, Observation
 
 
 @dataclass(frozen=True)
-class ApfSaParams(ApfParams):
+class ApfSaParams:
+    """``[controllers.apf_sa]``: the field's parameters (:class:`~.apf.ApfParams`, the same keys as
+    ``[controllers.apf]``, in this table) and those of the trap detector and the escape search."""
+
+    apf: ApfParams = field_doc(default_factory=ApfParams, inline=True, doc="the potential field's keys")
     trap_window_s: float = field_doc(2.0, doc="progress is judged over this window, s")
     trap_progress_frac: float = field_doc(0.7, doc="trapped below this fraction of cruise progress")
     trap_force_frac: float = field_doc(0.05, doc="|F| below this fraction of F_att_max = a minimum")
@@ -82,51 +87,56 @@ class _EgoState:
     failures: int = 0  # searches in a row that found no escape (the wait before the next doubles)
 
 
-class ApfSaController(ApfController):
-    params_cls = ApfSaParams
+class ApfSaController(BaseController):
+    """The potential field plus a simulated-annealing escape from its local minima, in each ego's route frame."""
+
     stats_keys = Keys(("sa_escapes", "sa_failed_searches"))  # what stats() writes
 
     def __init__(self, params: ApfSaParams, ctx):
         super().__init__(params, ctx)
+        self.driver = ApfDriver(params.apf, ctx)  # the field it drives and searches
+        self.rng = ctx.rng()
         self.state: dict[str, _EgoState] = {}
         self.escapes = 0
         self.failed_searches = 0
 
     def add_ego(self, task: EgoTask) -> None:
         super().add_ego(task)
+        self.driver.add_ego(task)
         self.state[task.vid] = _EgoState(deque())
 
     def remove_ego(self, vid: str) -> None:
         super().remove_ego(vid)
+        self.driver.remove_ego(vid)
         self.state.pop(vid, None)
 
     def stats(self) -> dict:
         return {"sa_escapes": self.escapes, "sa_failed_searches": self.failed_searches}
 
     def act(self, obs: Observation) -> np.ndarray:
-        p = self.p
+        p, a, drv = self.p, self.p.apf, self.driver
         out = np.zeros((len(obs.ego_ids), 2))
-        f_max = p.k_att * p.d_att_m
+        f_max = a.k_att * a.d_att_m
         t = obs.snapshot.time_s
         # backing up needs a view behind: ground truth, or a rear radar (a front radar alone backed the
         # ego into the cars behind it on an unseen netgenerate grid, 12 collisions on 2 seeds)
         sees_behind = obs.detections is None or any(d.mount == "rear" for d in obs.detections)
         for k, (vid, row) in enumerate(zip(obs.ego_ids, obs.ego_rows)):
-            task, st, view = self.tasks[vid], self.state[vid], self.views[vid]
-            sc = self.scene(obs, row, vid)
+            task, st, view = self.tasks[vid], self.state[vid], drv.views[vid]
+            sc = drv.scene(obs, row, vid)
             speed = float(np.hypot(*sc.vel))
             if st.escape_offset is not None:
                 self._update_escape(st, sc.d, t)
             st.history.append((t, sc.s))
             while st.history and st.history[0][0] < t - p.trap_window_s - 1e-9:
                 st.history.popleft()
-            offset, v_lane = view.lane_change(sc, self.lookahead(speed), p.gov_decel_mps2, self.step_s)  # the path's lane changes wait for a gap
+            offset, v_lane = view.lane_change(sc, drv.lookahead(speed), a.gov_decel_mps2, drv.step_s)  # the path's lane changes wait for a gap
             if st.escape_offset is not None:
                 offset, v_lane = st.escape_offset, np.inf
-            target = self.carrot(view, sc, offset)
-            fld = self.field(sc, sc.q[None, :], target)
+            target = drv.carrot(view, sc, offset)
+            fld = drv.field(sc, sc.q[None, :], target)
             force = float(np.hypot(*fld.F[0]))
-            v_road = min(self.road_speed(view, sc), v_lane)  # waiting for a gap is not being trapped
+            v_road = min(drv.road_speed(view, sc), v_lane)  # waiting for a gap is not being trapped
             v_ref = min(task.cruise_speed_mps, v_road)  # a car slowed for a bend is not trapped
 
             window_full = st.history[-1][0] - st.history[0][0] >= p.trap_window_s - 1e-9
@@ -148,12 +158,12 @@ class ApfSaController(ApfController):
                     st.escape_offset = self._inside_offset(view, sc, end)
                     st.escape_start_s = st.escape_clock_s = t
                     st.held_since_s, st.escape_err_m = None, math.inf
-                    target = self.carrot(view, sc, st.escape_offset)
-                    fld = self.field(sc, sc.q[None, :], target)
-            v = self.velocity(fld, task.cruise_speed_mps, v_road)
+                    target = drv.carrot(view, sc, st.escape_offset)
+                    fld = drv.field(sc, sc.q[None, :], target)
+            v = drv.velocity(fld, task.cruise_speed_mps, v_road)
             if st.escape_offset is not None:
                 v = self._make_room(st, sc, v, fld.v_safe, sees_behind)
-            out[k] = view.to_xy_velocity(sc.s, sc.d, v, self.step_s)
+            out[k] = view.to_xy_velocity(sc.s, sc.d, v, drv.step_s)
         return out
 
     def _inside_offset(self, view: RoadView, sc: FrenetScene, end) -> float:
@@ -168,7 +178,7 @@ class ApfSaController(ApfController):
         is no target)."""
         offset = float(end[1])
         need = 0.5 * sc.width + self.p.escape_margin_m
-        s_c = min(sc.s + self.lookahead(float(np.hypot(*sc.vel))), view.length_m)  # the carrot's s
+        s_c = min(sc.s + self.driver.lookahead(float(np.hypot(*sc.vel))), view.length_m)  # the carrot's s
         lo, hi = (float(v[0]) for v in view.corridor([s_c]))
         centres = view.lane_centres(s_c)
         if centres is not None:
@@ -190,7 +200,7 @@ class ApfSaController(ApfController):
             st.reversing = True
         if st.reversing:
             room = self._room_ahead(sc, heading=0.0)
-            if room >= max(self.p.escape_room_m, self.lookahead(0.0)):
+            if room >= max(self.p.escape_room_m, self.driver.lookahead(0.0)):
                 st.reversing = False
                 return v_des
             if not (sees_behind and self._clear_behind(sc)):  # never back into traffic, nor blind
@@ -209,7 +219,7 @@ class ApfSaController(ApfController):
         hd = np.array([math.cos(heading), math.sin(heading)])
         rel = footprint_corners(sc.o_pos, sc.o_heading, sc.o_length, sc.o_width) - pos
         x, y = rel @ hd, rel @ np.array([-hd[1], hd[0]])
-        half = 0.5 * sc.width + self.p.gov_margin_m
+        half = 0.5 * sc.width + self.p.apf.gov_margin_m
         return x, (y.max(axis=1) >= -half) & (y.min(axis=1) <= half)
 
     def _room_ahead(self, sc: FrenetScene, at=None, heading=None) -> float:
@@ -267,7 +277,7 @@ class ApfSaController(ApfController):
         x0 = sc.q
         # candidate footprints are aligned with the route (where the car would end up driving),
         # not with its momentary heading, which may point at the kerb after a manoeuvre
-        U0 = float(self.field(sc, x0[None, :], target, heading=0.0).U[0])
+        U0 = float(self.driver.field(sc, x0[None, :], target, heading=0.0).U[0])
         x, Ux, T = x0.copy(), U0, p.sa_t0
         for _ in range(p.sa_max_iter):
             a = rng.uniform(0.0, 2.0 * math.pi)
@@ -275,7 +285,7 @@ class ApfSaController(ApfController):
             if self._outside(view, x1, sc.length, sc.width):
                 T *= p.sa_cooling
                 continue
-            U1 = float(self.field(sc, x1[None, :], target, heading=0.0).U[0])
+            U1 = float(self.driver.field(sc, x1[None, :], target, heading=0.0).U[0])
             delta = U1 - Ux
             if delta <= 0.0 or math.exp(-delta / max(T, 1e-12)) > rng.uniform():
                 x, Ux = x1, U1

@@ -10,7 +10,7 @@ eq. 1-10 are summed there, and the result is mapped back to the plane:
   turn is straight to the flock.
 * **Neighbours** (eq. 1-6): the flock mates' positions and velocities in the ego's frame.
 * **Walls** (eq. 7-8): the edges of the carriageway, the lanes of the route's direction
-  (:class:`Carriageway`): one shill on each side, at distance from the footprint's corner nearest
+  (:class:`~sumo_avoid.road.carriageway.Carriageway`): one shill on each side, at distance from the footprint's corner nearest
   to that bound (the bound taken at the corner's s), velocity v_shill across the road, inwards.
   A footprint past a bound has distance 0 (full correction, SPEC §1).
 * **Obstacles**: the other vehicles' (and static obstacles') footprints mapped into the frame, one
@@ -43,60 +43,7 @@ from sumo_avoid.control.road_view import (
 from sumo_avoid.core.curves import braking_curve_D as D
 from sumo_avoid.core.geometry import convex_distance, footprint_corners, wrap_angle
 from sumo_avoid.core.types import EgoTask
-from sumo_avoid.road.route import LanePiece
-
-#: Lanes that do not go on to the next edge of the route end in a taper over this length, m.
-TAPER_M = 30.0
-_EPS = 1e-6
-
-
-def _edge_bounds(offsets, widths) -> np.ndarray:
-    o, w = np.asarray(offsets, float), np.asarray(widths, float)
-    return np.array([(o - 0.5 * w).min(), (o + 0.5 * w).max()])
-
-
-class Carriageway:
-    """The flock's walls along one route: d_lo(s) <= d <= d_hi(s), all lanes of the route's direction.
-
-    Unlike :class:`~sumo_avoid.road.route_lanes.RouteLanes` (one car keeps its path's lane, so the other
-    lanes taper to it before a junction) a flock spreads over every lane that goes on: before a
-    junction the bounds taper over the last min(``TAPER_M``, half the edge) from the edge's lanes
-    to the part of them the next edge's lanes continue (the intersection of both, in the path's d);
-    through the junction they widen linearly to the next edge's lanes. Piecewise linear in s.
-    """
-
-    def __init__(self, pieces: tuple[LanePiece, ...]):
-        normal = [k for k, p in enumerate(pieces) if not p.edge.startswith(":")]
-        pts: list[tuple[float, np.ndarray]] = []
-        for n, k in enumerate(normal):
-            p = pieces[k]
-            b0, b1 = _edge_bounds(p.offsets_start_m, p.widths_m), _edge_bounds(p.offsets_end_m, p.widths_m)
-            a, b = p.s_start_m, p.s_end_m
-            pts.append((a, b0))
-            if n + 1 == len(normal):
-                pts.append((b, b1))
-                continue
-            q = pieces[normal[n + 1]]
-            nxt = _edge_bounds(q.offsets_start_m, q.widths_m)
-            end = np.array([max(b1[0], nxt[0]), min(b1[1], nxt[1])])  # the lanes that go on
-            if end[1] - end[0] < 1e-3:  # the next edge's lanes lie beside the last ones: keep the path's own
-                end = nxt
-            t0 = max(a, b - min(TAPER_M, 0.5 * (b - a)))
-            f = (t0 - a) / (b - a) if b - a > _EPS else 0.0
-            pts += [(t0, (1 - f) * b0 + f * b1), (b, end)]
-        if not pts:  # a path of internal lanes only
-            pts = [(p.s_start_m, _edge_bounds(p.offsets_start_m, p.widths_m)) for p in pieces]
-            pts.append((pieces[-1].s_end_m, _edge_bounds(pieces[-1].offsets_end_m, pieces[-1].widths_m)))
-        s = np.array([q[0] for q in pts])
-        self._s = np.maximum.accumulate(s + _EPS * np.arange(len(s)))  # strictly increasing
-        self._lo = np.array([q[1][0] for q in pts])
-        self._hi = np.array([q[1][1] for q in pts])
-
-    def corridor(self, s) -> tuple[np.ndarray, np.ndarray]:
-        """(d_lo (N,), d_hi (N,)) at arc lengths s, m."""
-        s = np.atleast_1d(np.asarray(s, float))
-        return np.interp(s, self._s, self._lo), np.interp(s, self._s, self._hi)
-
+from sumo_avoid.road.carriageway import Carriageway
 
 def road_boxes(centres, vel, length, width) -> np.ndarray:
     """Footprints (N,4,2) in (s, d) of the flock mates (V2V sends no heading): along their velocity

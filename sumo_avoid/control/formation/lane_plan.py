@@ -19,7 +19,8 @@ leader in the leader's route frame. Every step:
    ``goal_lane_m`` of the goal); kappa 2 maps the shape's lanes linearly onto the fewer free lanes
    (narrowing); kappa 3 puts everyone in one lane, a column. Members that come to share a lane are
    strung out at least ``spacing_m`` apart in slot order.
-4. **Driving**: every member drives the ``apf`` road field (:mod:`.apf`: lane keeping, repulsion
+4. **Driving**: every member drives the ``apf`` road field (:mod:`sumo_avoid.control.apf.apf`, with the
+   scenario's ``[controllers.apf]``: lane keeping, repulsion
    from vehicles and the road's bounds, the speed governor behind what is ahead, the speed for
    bends) towards the centre of its lane; the leader at ``leader_speed_mps`` (slowed while the
    followers lag, ``wait_*``), a follower at the leader's speed along the road plus ``k_slot_ps`` x
@@ -35,7 +36,7 @@ import math
 import numpy as np
 
 from sumo_avoid.control.formation import field as ff
-from sumo_avoid.control.apf.apf import ApfController, ApfParams
+from sumo_avoid.control.apf.apf import ApfDriver, ApfParams
 from sumo_avoid.road.gaps import LANE_OVERLAP_M, lane_is_free
 from sumo_avoid.core.geometry import near_any
 from sumo_avoid.core.types import EgoTask, Observation
@@ -146,11 +147,14 @@ def in_frame(view, s_hint: float, xy, window_m: float) -> np.ndarray:
 
 
 class LaneFormation:
-    """The members' road driving for :class:`~sumo_avoid.control.formation.formation.FormationController`."""
+    """The members' road driving for :class:`~sumo_avoid.control.formation.formation.FormationController`:
+    every member drives the apf road field with the scenario's ``[controllers.apf]`` parameters
+    (``ctx.params``; a context built without a scenario, as in unit tests, has none: then
+    ``ApfParams()``, the defaults of that table)."""
 
     def __init__(self, p, ctx):
         self.p = p
-        self.driver = ApfController(ApfParams(), ctx)
+        self.driver = ApfDriver(ctx.params.get("controllers.apf", ApfParams()), ctx)
         self.lane_of: dict[str, int] = {}
         self._pool = (None, None)  # (the observation, every member's radar returns pooled): once a step
 

@@ -5,7 +5,7 @@ velocity commands (s_dot, d_dot) mapped back to the plane. In that frame the roa
 the formation frame's heading is the road's direction and a bend does not swing the slots.
 
 The drivable corridor is the walls: the lanes of the route's direction
-(:class:`~sumo_avoid.control.flocking.road_flock.Carriageway`, d_lo(s) <= d <= d_hi(s)).
+(:class:`~sumo_avoid.road.carriageway.Carriageway`, d_lo(s) <= d <= d_hi(s)).
 
 * **W_max**: the corridor narrows the free width like an obstacle: the intervals below the highest
   d_lo and above the lowest d_hi over [-depth, lookahead] about the leader are occupied.
@@ -20,10 +20,10 @@ from dataclasses import replace
 
 import numpy as np
 
-from sumo_avoid.control.flocking.road_flock import Carriageway
 from sumo_avoid.control.road_view import RoadView
 from sumo_avoid.core.geometry import wrap_angle
 from sumo_avoid.core.types import EgoTask, Observation
+from sumo_avoid.road.carriageway import Carriageway
 
 #: Vehicles farther than this along the road from the leader are moved out of the scene, m.
 SCENE_M = 250.0
