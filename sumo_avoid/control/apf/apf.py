@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sumo_avoid.control.base import BaseController
+from sumo_avoid.control.base_controller import BaseController
 from sumo_avoid.control.road_view import FrenetScene, RoadView
 from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.geometry import (

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sumo_avoid.control.apf.apf import ApfDriver, ApfParams
-from sumo_avoid.control.base import BaseController
+from sumo_avoid.control.base_controller import BaseController
 from sumo_avoid.control.road_view import FrenetScene, RoadView
 from sumo_avoid.core.config import FieldError, field_doc
 from sumo_avoid.core.geometry import footprint_corners
