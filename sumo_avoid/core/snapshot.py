@@ -21,7 +21,11 @@ def _frozen(a, dtype=float) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Snapshot:
-    """All vehicles in the simulation at one instant (N rows, same order in every array)."""
+    """All road users in the simulation at one instant (N rows, same order in every array): the
+    vehicles, then the persons outside vehicles (pedestrians; riders and passengers while they walk or
+    wait), each with its SUMO vehicle class (``"pedestrian"`` for a person, ``"bicycle"`` for a
+    cyclist, ...). Persons are rows like vehicles (their length and width are SUMO's person type's),
+    so every consumer sees them; ``is_person`` tells them apart."""
 
     time_s: float
     ids: tuple[str, ...]
@@ -35,6 +39,8 @@ class Snapshot:
     signals: Mapping[str, str] = field(default_factory=dict)  # traffic light id -> state string ('rGyG...')
     lane: tuple[str, ...] = ()  # (N,) SUMO lane id each vehicle is on ("" = none / not known)
     lane_pos: np.ndarray | None = None  # (N,) SUMO position of the front bumper along that lane, m (nan = not known)
+    vclass: tuple[str, ...] = ()  # (N,) SUMO vehicle class ("passenger", "bicycle", "bus", "pedestrian", ...; "" = not known)
+    is_person: np.ndarray | None = None  # (N,) bool, a person (not a vehicle); default none is
 
     def __post_init__(self):
         n = len(self.ids)
@@ -49,6 +55,9 @@ class Snapshot:
         object.__setattr__(self, "lane", tuple(self.lane) if len(self.lane) == n else ("",) * n)
         lane_pos = np.full(n, np.nan) if self.lane_pos is None or len(self.lane_pos) != n else self.lane_pos
         object.__setattr__(self, "lane_pos", _frozen(lane_pos).reshape(n))
+        object.__setattr__(self, "vclass", tuple(self.vclass) if len(self.vclass) == n else ("",) * n)
+        person = np.zeros(n, bool) if self.is_person is None or len(self.is_person) != n else self.is_person
+        object.__setattr__(self, "is_person", _frozen(person, bool).reshape(n))
 
     @property
     def n(self) -> int:

@@ -1,4 +1,6 @@
-"""Per-step recording of the world into arrays; becomes one pandas table after the run.
+"""Per-step recording of the world into arrays; becomes pandas tables after the run: the vehicles
+(:meth:`Recorder.table`, ``trajectories.csv``), the persons outside vehicles (:meth:`Recorder.persons`,
+``persons.csv``, the same columns), and each road user's SUMO class (:meth:`Recorder.classes`).
 
 Columns: :data:`COLUMNS` (``lane``, ``lane_pos``: where SUMO has the vehicle, its lane id and
 the front bumper's position along it; "" / empty where SUMO has it on no lane). Egos are always recorded; other vehicles only within ``record_radius_m`` of an ego (0 = all), to
@@ -28,6 +30,8 @@ class Recorder:
     def __init__(self, record_radius_m: float = 0.0):
         self.radius = record_radius_m
         self._chunks: list[tuple] = []
+        self._person_chunks: list[tuple] = []
+        self._classes: dict[str, str] = {}  # id -> SUMO vehicle class of every recorded road user
         self._sumo_events: list[dict] = []
         self._sumo_last: dict[tuple[str, str], int] = {}
         self._signals: list[tuple[float, str, str]] = []
@@ -45,13 +49,15 @@ class Recorder:
             keep |= near_any(snap.pos, snap.pos[snap.is_ego], self.radius)
         elif self.radius <= 0:
             keep[:] = True
-        idx = np.flatnonzero(keep)
-        if len(idx) == 0:
-            return
-        ids = np.array(snap.ids, dtype=object)[idx]
-        self._chunks.append((step, snap.time_s, ids, snap.is_ego[idx], snap.pos[idx], snap.vel[idx],
-                             snap.heading[idx], snap.length[idx], snap.width[idx],
-                             np.array(snap.lane, dtype=object)[idx], snap.lane_pos[idx]))
+        for chunks, rows in ((self._chunks, keep & ~snap.is_person), (self._person_chunks, keep & snap.is_person)):
+            idx = np.flatnonzero(rows)
+            if len(idx) == 0:
+                continue
+            ids = np.array(snap.ids, dtype=object)[idx]
+            self._classes.update(zip(ids.tolist(), np.array(snap.vclass, dtype=object)[idx].tolist()))
+            chunks.append((step, snap.time_s, ids, snap.is_ego[idx], snap.pos[idx], snap.vel[idx],
+                           snap.heading[idx], snap.length[idx], snap.width[idx],
+                           np.array(snap.lane, dtype=object)[idx], snap.lane_pos[idx]))
 
     def record_sumo_collisions(self, step: int, collisions) -> None:
         for c in collisions:
@@ -63,24 +69,16 @@ class Recorder:
             self._sumo_last[pair] = step
 
     def table(self) -> pd.DataFrame:
-        if not self._chunks:
-            return pd.DataFrame({c: pd.Series(dtype=float) for c in COLUMNS})
-        sizes = [len(c[2]) for c in self._chunks]
-        pos = np.concatenate([c[4] for c in self._chunks])
-        vel = np.concatenate([c[5] for c in self._chunks])
-        return pd.DataFrame({
-            "step": np.repeat([c[0] for c in self._chunks], sizes).astype(np.int64),
-            "time_s": np.repeat([c[1] for c in self._chunks], sizes),
-            "id": np.concatenate([c[2] for c in self._chunks]).astype(str),
-            "is_ego": np.concatenate([c[3] for c in self._chunks]),
-            "x": pos[:, 0], "y": pos[:, 1], "vx": vel[:, 0], "vy": vel[:, 1],
-            "speed": np.hypot(vel[:, 0], vel[:, 1]),
-            "heading": wrap_angle(np.concatenate([c[6] for c in self._chunks])),
-            "length": np.concatenate([c[7] for c in self._chunks]),
-            "width": np.concatenate([c[8] for c in self._chunks]),
-            "lane": np.concatenate([c[9] for c in self._chunks]).astype(str),
-            "lane_pos": np.concatenate([c[10] for c in self._chunks]),
-        })
+        """The vehicles: one row per recorded vehicle per step (:data:`COLUMNS`)."""
+        return _frame(self._chunks)
+
+    def persons(self) -> pd.DataFrame:
+        """The persons outside vehicles, as :meth:`table` (``is_ego`` always false)."""
+        return _frame(self._person_chunks)
+
+    def classes(self) -> dict[str, str]:
+        """id -> SUMO vehicle class ("pedestrian" for a person) of every road user recorded."""
+        return dict(self._classes)
 
     def signals(self) -> pd.DataFrame:
         """Traffic light states, one row per change (and the first state of each light)."""
@@ -88,3 +86,24 @@ class Recorder:
 
     def sumo_events(self) -> pd.DataFrame:
         return pd.DataFrame(self._sumo_events, columns=["step", "time_s", "a", "b", "collider", "victim", "type", "lane"])
+
+
+def _frame(chunks: list[tuple]) -> pd.DataFrame:
+    if not chunks:
+        return pd.DataFrame({c: pd.Series(dtype=float) for c in COLUMNS})
+    sizes = [len(c[2]) for c in chunks]
+    pos = np.concatenate([c[4] for c in chunks])
+    vel = np.concatenate([c[5] for c in chunks])
+    return pd.DataFrame({
+        "step": np.repeat([c[0] for c in chunks], sizes).astype(np.int64),
+        "time_s": np.repeat([c[1] for c in chunks], sizes),
+        "id": np.concatenate([c[2] for c in chunks]).astype(str),
+        "is_ego": np.concatenate([c[3] for c in chunks]),
+        "x": pos[:, 0], "y": pos[:, 1], "vx": vel[:, 0], "vy": vel[:, 1],
+        "speed": np.hypot(vel[:, 0], vel[:, 1]),
+        "heading": wrap_angle(np.concatenate([c[6] for c in chunks])),
+        "length": np.concatenate([c[7] for c in chunks]),
+        "width": np.concatenate([c[8] for c in chunks]),
+        "lane": np.concatenate([c[9] for c in chunks]).astype(str),
+        "lane_pos": np.concatenate([c[10] for c in chunks]),
+    })

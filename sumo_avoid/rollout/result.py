@@ -21,7 +21,7 @@ class Scene:
 class RunResult:
     scenario: Any  # sumo_avoid.scenario.spec.Scenario
     scene: Scene
-    traj: pd.DataFrame  # one row per recorded vehicle per step (rollout.recorder)
+    traj: pd.DataFrame  # one row per recorded vehicle per step (rollout.recorder); persons apart (persons)
     sumo_events: pd.DataFrame  # SUMO's own collision reports
     goals: dict  # ego id -> (x, y)
     steps: int
@@ -32,6 +32,8 @@ class RunResult:
     tasks: dict = field(default_factory=dict)  # ego id -> EgoTask (route path, junction links, speed limits)
     signals: pd.DataFrame | None = None  # traffic light states: time_s, tls, state (a row per change)
     ssm: Any = None  # sumo_avoid.sumo.ssm_device.SsmParams SUMO's SSM device ran with (conflicts in tables), None: off
+    persons: pd.DataFrame | None = None  # one row per recorded person per step, columns as traj (rollout.recorder)
+    classes: dict = field(default_factory=dict)  # id -> SUMO vehicle class of every recorded road user
     _memo: dict = field(default_factory=dict, compare=False, repr=False)
 
     @property

@@ -27,7 +27,10 @@ from sumo_avoid.sumo.ssm_device import SsmRequest, equip, ssm_args
 
 _DYNAMIC = (libsumo.constants.VAR_POSITION, libsumo.constants.VAR_ANGLE, libsumo.constants.VAR_SPEED,
             libsumo.constants.VAR_LANE_ID, libsumo.constants.VAR_LANEPOSITION)
-_SIM_VARS = (libsumo.constants.VAR_DEPARTED_VEHICLES_IDS, libsumo.constants.VAR_ARRIVED_VEHICLES_IDS)
+_PERSON = (libsumo.constants.VAR_POSITION, libsumo.constants.VAR_ANGLE, libsumo.constants.VAR_SPEED,
+           libsumo.constants.VAR_LANE_ID, libsumo.constants.VAR_LANEPOSITION, libsumo.constants.VAR_VEHICLE)
+_SIM_VARS = (libsumo.constants.VAR_DEPARTED_VEHICLES_IDS, libsumo.constants.VAR_ARRIVED_VEHICLES_IDS,
+             libsumo.constants.VAR_DEPARTED_PERSONS_IDS, libsumo.constants.VAR_ARRIVED_PERSONS_IDS)
 EGO_SPEED_MODE = 32  # all of SUMO's speed safety checks off (verified: a commanded crash happens)
 EGO_LANE_CHANGE_MODE = 0  # SUMO changes no lanes for the ego: the plug-in is in charge
 
@@ -103,6 +106,8 @@ class SumoSim:
         self.step_s = libsumo.simulation.getDeltaT()
         libsumo.simulation.subscribe(list(_SIM_VARS))
         self._dims: dict[str, tuple[float, float]] = {}  # id -> (length, width), static
+        self._vclass: dict[str, str] = {}  # vehicle id -> SUMO vehicle class, static
+        self._persons: dict[str, tuple[float, float]] = {}  # person id -> (length, width), static
         self._egos: set[str] = set()
         self._applied: dict[str, float] = {}  # ego -> the signed speed it was last moved at (see read)
         self._routes: dict[str, tuple[str, ...]] = {}  # ego -> its route as SUMO gave it at take-over
@@ -110,6 +115,7 @@ class SumoSim:
         self._static_key: tuple[str, ...] | None = None  # read(): libsumo's ids the cached static part is for
         self._static: tuple = ()
         self._subscribe_new(libsumo.vehicle.getIDList())
+        self._subscribe_persons(libsumo.person.getIDList())
         for tls in libsumo.trafficlight.getIDList():  # every signal's state, read with the vehicles
             libsumo.trafficlight.subscribe(tls, [libsumo.constants.TL_RED_YELLOW_GREEN_STATE])
 
@@ -119,6 +125,13 @@ class SumoSim:
             if vid not in self._dims:
                 libsumo.vehicle.subscribe(vid, list(_DYNAMIC))
                 self._dims[vid] = (libsumo.vehicle.getLength(vid), libsumo.vehicle.getWidth(vid))
+                self._vclass[vid] = libsumo.vehicle.getVehicleClass(vid)
+
+    def _subscribe_persons(self, ids) -> None:
+        for pid in ids:
+            if pid not in self._persons:
+                libsumo.person.subscribe(pid, list(_PERSON))
+                self._persons[pid] = (libsumo.person.getLength(pid), libsumo.person.getWidth(pid))
 
     def read(self) -> Snapshot:
         """The world now, as an immutable snapshot (centres, math headings)."""
@@ -133,7 +146,8 @@ class SumoSim:
         ids, dims, is_ego = self._static
         n = len(ids)
         signals = self._signals()
-        if n == 0:
+        persons = self._read_persons() if self._persons else None
+        if n == 0 and persons is None:
             return Snapshot.empty(self.time_s, signals)
         rows = res.values() if n == len(key) else [res[v] for v in ids]
         c = libsumo.constants
@@ -151,9 +165,39 @@ class SumoSim:
             if mine:
                 rows_e, v_e = zip(*mine)
                 flat[list(rows_e), 3] = np.asarray(v_e, float) + 0.0  # (+ 0.0: no -0.0 in the recording)
-        return Snapshot(self.time_s, ids, centre, direction * flat[:, 3:4], heading,
-                        dims[:, 0], dims[:, 1], is_ego, signals=signals, lane=lane,
-                        lane_pos=np.where([bool(x) for x in lane], flat[:, 4], np.nan))
+        vclass = tuple(self._vclass[v] for v in ids)
+        lane_pos = np.where([bool(x) for x in lane], flat[:, 4], np.nan)
+        vel, length, width, person = direction * flat[:, 3:4], dims[:, 0], dims[:, 1], np.zeros(n, bool)
+        if persons is not None:
+            p_ids, p_centre, p_vel, p_heading, p_dims, p_lane, p_lane_pos = persons
+            ids, lane, vclass = ids + p_ids, lane + p_lane, vclass + ("pedestrian",) * len(p_ids)
+            centre, vel = np.concatenate([centre, p_centre]), np.concatenate([vel, p_vel])
+            heading = np.concatenate([heading, p_heading])
+            length, width = np.concatenate([length, p_dims[:, 0]]), np.concatenate([width, p_dims[:, 1]])
+            is_ego, person = np.concatenate([is_ego, np.zeros(len(p_ids), bool)]), np.r_[person, np.ones(len(p_ids), bool)]
+            lane_pos = np.concatenate([lane_pos, p_lane_pos])
+        return Snapshot(self.time_s, ids, centre, vel, heading, length, width, is_ego, signals=signals, lane=lane,
+                        lane_pos=lane_pos, vclass=vclass, is_person=person)
+
+    def _read_persons(self):
+        """The persons outside vehicles: ids, centres, velocities, headings, (length, width), lanes, lane
+        positions; None when there are none. SUMO's person position is taken as the front, like a vehicle's."""
+        c = libsumo.constants
+        res = libsumo.person.getAllSubscriptionResults()
+        rows = [(pid, r) for pid, r in res.items() if pid in self._persons and not r[c.VAR_VEHICLE]]
+        if not rows:
+            return None
+        m = len(rows)
+        flat = np.fromiter(itertools.chain.from_iterable((*r[c.VAR_POSITION], r[c.VAR_ANGLE], r[c.VAR_SPEED],
+                                                          r[c.VAR_LANEPOSITION]) for _, r in rows), float, 5 * m)
+        flat = flat.reshape(m, 5)
+        p_ids = tuple(pid for pid, _ in rows)
+        dims = np.array([self._persons[pid] for pid in p_ids], float).reshape(m, 2)
+        heading = np.radians(90.0 - flat[:, 2])
+        direction = np.column_stack([np.cos(heading), np.sin(heading)])
+        lane = tuple(r[c.VAR_LANE_ID] for _, r in rows)
+        return (p_ids, flat[:, :2] - direction * (dims[:, :1] / 2.0), direction * flat[:, 3:4], heading, dims, lane,
+                np.where([bool(x) for x in lane], flat[:, 4], np.nan))
 
     @staticmethod
     def _signals() -> dict[str, str]:
@@ -224,6 +268,7 @@ class SumoSim:
             libsumo.vehicle.unsubscribe(vid)
             libsumo.vehicle.remove(vid)
             self._dims.pop(vid)
+            self._vclass.pop(vid, None)
 
     # --- stepping --------------------------------------------------------------------------
     def step(self) -> list[SumoCollision]:
@@ -235,10 +280,15 @@ class SumoSim:
         for vid in arrived:
             self._placement.forget(vid)
             self._dims.pop(vid, None)
+            self._vclass.pop(vid, None)
             self._egos.discard(vid)
             self._applied.pop(vid, None)
             self._static_key = None
         self._subscribe_new(self.departed())
+        results = libsumo.simulation.getSubscriptionResults()
+        for pid in results[libsumo.constants.VAR_ARRIVED_PERSONS_IDS]:
+            self._persons.pop(pid, None)
+        self._subscribe_persons(results[libsumo.constants.VAR_DEPARTED_PERSONS_IDS])
         t = self.time_s
         return [SumoCollision(t, c.collider, c.victim, c.type, c.lane) for c in libsumo.simulation.getCollisions()]
 
