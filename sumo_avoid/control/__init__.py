@@ -1,15 +1,16 @@
 """Controllers by name (``ego.controller``): ``CONTROLLERS[name]`` -> (class, frozen parameters).
 
 Every controller is built as ``cls(params, context)`` (:class:`sumo_avoid.core.interfaces.Context`)
-and follows :class:`sumo_avoid.core.interfaces.Controller`. A new controller is one file here plus
-one line below (docs/writing_a_controller.md).
+and follows :class:`sumo_avoid.core.interfaces.Controller` (defaults:
+:class:`~sumo_avoid.control.base_controller.BaseController`). A family of controllers is a folder
+(``apf/``, ``flocking/``, ``formation/``, ``ga_planner/``) whose ``__init__`` exports its controllers and
+parameters; a simple controller is one file here (``scripted.py``); either is one line below
+(docs/writing_a_controller.md).
 """
-from sumo_avoid.control.apf.apf import ApfController, ApfParams
-from sumo_avoid.control.apf.apf_sa import ApfSaController, ApfSaParams
-from sumo_avoid.control.flocking.terms import FlockingParams
-from sumo_avoid.control.flocking.flocking import FlockingController
-from sumo_avoid.control.formation.formation import FormationController, FormationParams
-from sumo_avoid.control.ga_planner.ga_planner import GaPlannerController, GaPlannerParams
+from sumo_avoid.control.apf import ApfController, ApfParams, ApfSaController, ApfSaParams
+from sumo_avoid.control.flocking import FlockingController, FlockingParams
+from sumo_avoid.control.formation import FormationController, FormationParams
+from sumo_avoid.control.ga_planner import GaPlannerController, GaPlannerParams
 from sumo_avoid.control.scripted import ScriptedController, ScriptedParams
 from sumo_avoid.core.registry import Registry
 

@@ -11,8 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sumo_avoid.control.base_controller import BaseController
 from sumo_avoid.core.config import field_doc
-from sumo_avoid.core.types import EgoTask, Keys, Needs, Observation
+from sumo_avoid.core.types import EgoTask, Observation
 
 
 @dataclass(frozen=True)
@@ -29,22 +30,20 @@ class ScriptedParams:
                 raise ValueError(f"controllers.scripted.stop_after_m.{k}: a non-negative distance in m, got {v!r}")
 
 
-class ScriptedController:
+class ScriptedController(BaseController):
     """Straight ahead at a fixed speed, blind (for crash tests)."""
 
-    needs = Needs(goals=True)
-    metrics = ()  # metrics of its own beside the standard set
-    stats_keys = Keys()  # what stats() writes: nothing
-
     def __init__(self, params: ScriptedParams, ctx=None):
-        self.p = params
+        super().__init__(params, ctx)
         self._dir: dict[str, float] = {}
         self._start: dict[str, np.ndarray] = {}
 
     def add_ego(self, task: EgoTask) -> None:
+        super().add_ego(task)
         self._dir[task.vid] = math.nan if self.p.direction_deg is None else math.radians(self.p.direction_deg)
 
     def remove_ego(self, vid: str) -> None:
+        super().remove_ego(vid)
         self._dir.pop(vid, None)
         self._start.pop(vid, None)
 
@@ -62,9 +61,3 @@ class ScriptedController:
                 if np.hypot(*(snap.pos[r] - start)) >= limit:
                     out[k] = 0.0
         return out
-
-    def stats(self) -> dict:
-        return {}
-
-    def tables(self) -> dict:
-        return {}

@@ -25,8 +25,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from sumo_avoid.control.formation import field as ff
-from sumo_avoid.control.formation.formation import member_order
 from sumo_avoid.core.geometry import (
     convex_distance,
     convex_overlap,
@@ -35,6 +33,8 @@ from sumo_avoid.core.geometry import (
 )
 from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import Metric
+from sumo_avoid.planning import formation_shape as ff
+from sumo_avoid.planning.formation_shape import member_order
 from sumo_avoid.rollout.result import RunResult
 
 NEAR_M = 5.0  # obstacle_min_gap_m looks at obstacles within this of a footprint's circumcircle, m

@@ -3,53 +3,50 @@ gamma_min and kappa, each against values computed by hand."""
 from __future__ import annotations
 
 import math
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from sumo_avoid.control import CONTROLLERS
 from sumo_avoid.control.formation import field as ff
-from sumo_avoid.control.formation.formation import (
-    FormationController,
-    FormationParams,
-    forward_cone,
-    member_order,
-)
+from sumo_avoid.control.formation.formation import FormationController, FormationParams, forward_cone
+from sumo_avoid.control.formation.trail import LeaderTrail
+from sumo_avoid.planning import formation_shape as fs
+from sumo_avoid.planning.formation_shape import member_order
 
 
 def test_registered_and_seed_triangle():
     assert CONTROLLERS["formation"].factory is FormationController
     # the seed's triangle of 6: (0,0), (-1,-1), (-1,1), (-2,-2), (-2,2), (-2,0) in its unit (x 8 m)
-    got = ff.slots("triangle", 6, 8.0, 90.0)
+    got = fs.slots("triangle", 6, 8.0, 90.0)
     assert got == pytest.approx(8.0 * np.array([[0, 0], [-1, -1], [-1, 1], [-2, -2], [-2, 2], [-2, 0]]), abs=1e-9)
     # apex 60 deg: half angle 30 deg, row 1 at +-tan(30) s = +-0.57735 s
-    assert ff.slots("triangle", 3, 10.0, 60.0)[1:] == pytest.approx(np.array([[-10.0, -5.773503], [-10.0, 5.773503]]), abs=1e-6)
+    assert fs.slots("triangle", 3, 10.0, 60.0)[1:] == pytest.approx(np.array([[-10.0, -5.773503], [-10.0, 5.773503]]), abs=1e-6)
 
 
 def test_other_shapes():
-    assert ff.slots("line", 4, 5.0).tolist() == [[0, 0], [0, -5], [0, 5], [0, -10]]
-    assert ff.slots("column", 3, 5.0).tolist() == [[0, 0], [-5, 0], [-10, 0]]
-    assert ff.slots("v", 5, 2.0) == pytest.approx(np.array([[0, 0], [-2, -2], [-2, 2], [-4, -4], [-4, 4]]))
-    assert ff.slots("diamond", 6, 1.0) == pytest.approx(np.array([[0, 0], [-1, -1], [-1, 1], [-2, 0], [-3, -1], [-3, 1]]))
+    assert fs.slots("line", 4, 5.0).tolist() == [[0, 0], [0, -5], [0, 5], [0, -10]]
+    assert fs.slots("column", 3, 5.0).tolist() == [[0, 0], [-5, 0], [-10, 0]]
+    assert fs.slots("v", 5, 2.0) == pytest.approx(np.array([[0, 0], [-2, -2], [-2, 2], [-4, -4], [-4, 4]]))
+    assert fs.slots("diamond", 6, 1.0) == pytest.approx(np.array([[0, 0], [-1, -1], [-1, 1], [-2, 0], [-3, -1], [-3, 1]]))
     # the road case's diamond: 15 m along, apex 2 atan(3.5 / 15): one 3.5 m lane to each side
     apex = 2.0 * math.degrees(math.atan(3.5 / 15.0))
-    assert ff.slots("diamond", 4, 15.0, apex) == pytest.approx(np.array([[0, 0], [-15, -3.5], [-15, 3.5], [-30, 0]]))
+    assert fs.slots("diamond", 4, 15.0, apex) == pytest.approx(np.array([[0, 0], [-15, -3.5], [-15, 3.5], [-30, 0]]))
     with pytest.raises(ValueError):
-        ff.slots("circle", 3, 1.0)
+        fs.slots("circle", 3, 1.0)
 
 
 def test_to_world_turns_and_scales():
     off = np.array([[-8.0, 8.0]])
     # heading 90 deg: forward is +y, left is -x; lateral scale 0.5 -> (-8, 4) -> (-4, -8) + origin
-    assert ff.to_world(off, [10.0, 20.0], math.pi / 2, 0.5) == pytest.approx(np.array([[6.0, 12.0]]))
+    assert fs.to_world(off, [10.0, 20.0], math.pi / 2, 0.5) == pytest.approx(np.array([[6.0, 12.0]]))
 
 
 def test_min_lateral_scale_triangle():
     # rows 8 m apart (> 4 + 1): only row 2's neighbours (dy = 16) count: (1.8 + 1) / 16
-    assert ff.min_lateral_scale(ff.slots("triangle", 6, 8.0), 4.0, 1.8, 1.0) == pytest.approx(0.175)
-    assert ff.min_lateral_scale(ff.slots("column", 3, 8.0), 4.0, 1.8, 1.0) == 0.0
-    assert ff.min_lateral_scale(ff.slots("line", 3, 2.0), 4.0, 1.8, 1.0) == 1.0  # capped at 1
+    assert ff.min_lateral_scale(fs.slots("triangle", 6, 8.0), 4.0, 1.8, 1.0) == pytest.approx(0.175)
+    assert ff.min_lateral_scale(fs.slots("column", 3, 8.0), 4.0, 1.8, 1.0) == 0.0
+    assert ff.min_lateral_scale(fs.slots("line", 3, 2.0), 4.0, 1.8, 1.0) == 1.0  # capped at 1
 
 
 def test_repulsion_terms_by_hand():
@@ -130,18 +127,18 @@ def test_lost_follower_follows_the_leaders_path_then_its_goal():
     spacing_m (8 m) ahead on the leader's path past its nearest point, never going back along it, and
     at its own goal for good once that point would lie beyond the path's end (by hand: a path along
     the x axis from 0 to 100 m)."""
-    c = FormationController(FormationParams(), SimpleNamespace(step_s=0.1, obstacles=(), road=None, walls=None))
+    c = LeaderTrail(FormationParams())
     x = np.arange(0.0, 100.01, 0.5)
-    c.trail = np.column_stack([x, np.zeros_like(x), x])
+    c.path = np.column_stack([x, np.zeros_like(x), x])
     goal = np.array([[0.0, 50.0]])
     at = np.array([[50.0, 5.0]])
     for k in range(100):  # 9.9 s without progress: still its goal
-        assert c._lost_goals(["f1"], at, goal, 0.1 * k).tolist() == goal.tolist()
+        assert c.lost_goals(["f1"], at, goal, 0.1 * k).tolist() == goal.tolist()
     # at 10 s: lost -> the path's point 50 + 8 = 58 m
-    assert c._lost_goals(["f1"], at, goal, 10.0) == pytest.approx(np.array([[58.0, 0.0]]))
+    assert c.lost_goals(["f1"], at, goal, 10.0) == pytest.approx(np.array([[58.0, 0.0]]))
     # it drifted back beside x = 40: still 58 (never back along the path); at x = 70: 78
-    assert c._lost_goals(["f1"], np.array([[40.0, 3.0]]), goal, 10.1) == pytest.approx(np.array([[58.0, 0.0]]))
-    assert c._lost_goals(["f1"], np.array([[70.0, 1.0]]), goal, 10.2) == pytest.approx(np.array([[78.0, 0.0]]))
+    assert c.lost_goals(["f1"], np.array([[40.0, 3.0]]), goal, 10.1) == pytest.approx(np.array([[58.0, 0.0]]))
+    assert c.lost_goals(["f1"], np.array([[70.0, 1.0]]), goal, 10.2) == pytest.approx(np.array([[78.0, 0.0]]))
     # at x = 93: 93 + 8 > 100 -> its goal, and so from then on wherever it is
-    assert c._lost_goals(["f1"], np.array([[93.0, 0.0]]), goal, 10.3).tolist() == goal.tolist()
-    assert c._lost_goals(["f1"], np.array([[50.0, 5.0]]), goal, 30.0).tolist() == goal.tolist()
+    assert c.lost_goals(["f1"], np.array([[93.0, 0.0]]), goal, 10.3).tolist() == goal.tolist()
+    assert c.lost_goals(["f1"], np.array([[50.0, 5.0]]), goal, 30.0).tolist() == goal.tolist()

@@ -9,6 +9,7 @@ from conftest import SCENARIOS
 
 from sumo_avoid.runs import outputs as evaluate
 from sumo_avoid.control.formation import field as ff
+from sumo_avoid.planning import formation_shape as fs
 from sumo_avoid.control.formation.lane_plan import (
     assign_lanes,
     blocked_lanes,
@@ -22,7 +23,7 @@ from sumo_avoid.scenario import spec as scenario
 ROAD = SCENARIOS / "formation" / "road_closure.toml"
 LEFT = SCENARIOS / "formation" / "road_closure_left.toml"
 # the road case's diamond: spacing 15 m, apex 2 atan(3.5 / 15): side slots one 3.5 m lane right and left
-DIAMOND = ff.slots("diamond", 4, 15.0, 26.260)
+DIAMOND = fs.slots("diamond", 4, 15.0, 26.260)
 CENTRES, WIDTHS = np.array([-3.5, 0.0, 3.5, 7.0]), np.full(4, 3.5)  # 4 lanes, bounds -5.25 .. 8.75
 
 

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from sumo_avoid.control.formation.field import slots
+from sumo_avoid.planning.formation_shape import slots
 from sumo_avoid.metrics.formation_score import (
     arrival_time,
     distortion,

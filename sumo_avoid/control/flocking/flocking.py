@@ -35,6 +35,7 @@ import shapely
 from shapely.geometry import MultiPolygon, Polygon
 from shapely.geometry.polygon import orient
 
+from sumo_avoid.control.base_controller import BaseController
 from sumo_avoid.control.flocking.road_flock import RoadFlock
 from sumo_avoid.control.flocking.terms import (
     FlockingParams,
@@ -59,7 +60,7 @@ from sumo_avoid.sensing.v2v import V2VParams
 
 
 # ------------------------------------------------------------------------------ controller
-class FlockingController:
+class FlockingController(BaseController):
     """Vásárhelyi flocking (SPEC §1): repulsion, alignment, walls and obstacles as shill agents."""
 
     needs = Needs(goals=False, v2v=True)  # a flock has no goal; members' states come over V2V
@@ -67,8 +68,7 @@ class FlockingController:
     stats_keys = Keys(("flocking_updates",))  # what stats() writes
 
     def __init__(self, params: FlockingParams, ctx=None):
-        self.p = params
-        self.tasks: set[str] = set()
+        super().__init__(params, ctx)
         self._area = None
         self._walls = (np.zeros((0, 2)), np.zeros((0, 2)), np.zeros((0, 2)))
         # on a road (no [arena] walls) each ego flocks in its route frame, the carriageway's edges
@@ -107,21 +107,18 @@ class FlockingController:
 
     # --- protocol ------------------------------------------------------------------------------
     def add_ego(self, task: EgoTask) -> None:
-        self.tasks.add(task.vid)
+        super().add_ego(task)
         if self.road is not None:
             self.road.add(task)
 
     def remove_ego(self, vid: str) -> None:
-        self.tasks.discard(vid)
+        super().remove_ego(vid)
         self._cache.pop(vid, None)
         if self.road is not None:
             self.road.remove(vid)
 
     def stats(self) -> dict:
         return {"flocking_updates": self.updates}
-
-    def tables(self) -> dict:
-        return {}
 
     def v2v_params(self) -> V2VParams:
         """The V2V link this flock talks over (delay, noise, GPS error: [controllers.flocking] keys)."""

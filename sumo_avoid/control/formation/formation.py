@@ -1,7 +1,7 @@
 """``formation``: leader-follower formation of connected vehicles (SPEC §3, seed 003).
 
 The **leader** (the first of ``members``) drives to its goal along the goal-aware potential field
-of SPEC §3 (:mod:`.formation_field`):
+of SPEC §3 (:mod:`.field`):
 
     F = eta_at rho_g g  +  reshape_{alpha, beta}( sum over obstacles of F_re1 + F_re2 )
 
@@ -10,39 +10,39 @@ F_p, F_q' = F_q + beta |F_re| in the vehicle frame slides the resultant round an
 along F at ``leader_speed_mps``, slowing near its goal and while the followers lag behind. Values
 (n = 1, alpha = -0.3, beta = +0.3) and why: docs/formation.md.
 
-**Followers** hold slots of a shape (:func:`.formation_field.slots`) at the leader's position,
+**Followers** hold slots of a shape (:func:`sumo_avoid.planning.formation_shape.slots`) at the leader's position,
 turned by its heading low-passed with ``frame_tau_s``: command = the leader's velocity (V2V) +
 ``k_slot_ps`` x slot error + the same goal-aware repulsion + member repulsion, capped.
 
 **Mode** (SPEC §3): gamma = W_max / W, W the nominal shape's width across the formation frame,
 W_max the free width the obstacles the leader knows leave within [-depth, ``lookahead_m``] along it,
-centred on the leader's line (:func:`.formation_field.free_width`). kappa = 1 keeps the shape,
+centred on the leader's line (:func:`.field.free_width`). kappa = 1 keeps the shape,
 kappa = 2 scales it laterally to fit W_max with ``clear_m`` each side, kappa = 3 (gamma <= gamma_min,
 from ``safe_gap_m``) breaks it up: each follower avoids on its own with a weak pull
 (``k_slot_broken_ps``) to its nominal slot (``broken = "slots"``) or to the point j x ``spacing_m``
 behind the leader on the leader's path (``"trail"``). A higher kappa at once, a lower one after
 ``relax_s``; docs/formation.md has the details and why.
 
-**Safety shield** (:mod:`.formation_shield`): every command passes a velocity barrier against the
+**Safety shield** (:mod:`.shield`): every command passes a velocity barrier against the
 obstacles, other vehicles and the other members, whatever the gains. **On a road** (no
 ``[arena]``) everything runs in the leader's route frame, the carriageway the walls
-(:mod:`.formation_road`).
+(:mod:`.road_frame`, :mod:`.lane_plan`).
 
 Sensing (truth or radar) and V2V: the leader's obstacle list goes to every member; the details,
 and what each member's shield also sees, in docs/formation.md.
 """
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 
 import numpy as np
 
+from sumo_avoid.control.base_controller import BaseController
 from sumo_avoid.control.formation import field as ff
 from sumo_avoid.control.formation import shield
 from sumo_avoid.control.formation.lane_plan import LaneFormation
-from sumo_avoid.control.formation.road_frame import RoadFrame
 from sumo_avoid.control.formation.obstacle_lists import ObstacleLists
+from sumo_avoid.control.formation.road_frame import RoadFrame
 from sumo_avoid.control.formation.trail import LeaderTrail
 from sumo_avoid.core.config import FieldError, field_doc
 from sumo_avoid.core.geometry import (
@@ -52,11 +52,16 @@ from sumo_avoid.core.geometry import (
     wrap_angle,
 )
 from sumo_avoid.core.types import EgoTask, Keys, Needs, Observation
+from sumo_avoid.planning.formation_shape import SHAPES, member_order, slots, to_world
 from sumo_avoid.sensing.v2v import V2VParams
 
 
 @dataclass(frozen=True)
 class FormationParams:
+    """``[controllers.formation]``. On a road with ``road = "lanes"`` every member drives the apf road
+    field with the scenario's ``[controllers.apf]`` parameters (read from ``Context.params``; a
+    context built without a scenario, as in unit tests, takes that table's defaults)."""
+
     shape: str = field_doc("triangle", doc="formation shape: triangle, line, column, v, diamond")
     spacing_m: float = field_doc(8.0, positive=True, doc="slot spacing (the seed's unit, scaled), m")
     apex_deg: float = field_doc(90.0, positive=True, doc="triangle / v apex angle at the leader, deg (90 = the seed's "
@@ -130,22 +135,11 @@ class FormationParams:
             raise FieldError("road", "'lanes' or 'field'", self.road)
         if self.broken not in ("slots", "trail"):
             raise FieldError("broken", "'slots' or 'trail'", self.broken)
-        if self.shape not in ff.SHAPES:
-            raise FieldError("shape", f"one of {list(ff.SHAPES)}", self.shape)
+        if self.shape not in SHAPES:
+            raise FieldError("shape", f"one of {list(SHAPES)}", self.shape)
         for k in ("alpha", "beta"):
             if not -1.0 < getattr(self, k) < 1.0:
                 raise FieldError(k, "a number in (-1, 1)", getattr(self, k))
-
-
-def natural_key(vid: str):
-    """Sort key: digits as numbers (f2 before f10)."""
-    return [int(t) if t.isdigit() else t for t in re.split(r"(\d+)", vid)]
-
-
-def member_order(params: FormationParams, ego_ids) -> list[str]:
-    """Slot order of the formation: ``members`` if given, else the ids in natural order."""
-    return list(params.members) if params.members else sorted(ego_ids, key=natural_key)
-
 
 
 def forward_cone(v, heading: float, max_turn: float) -> np.ndarray:
@@ -159,7 +153,7 @@ def forward_cone(v, heading: float, max_turn: float) -> np.ndarray:
     return float(np.hypot(*v)) * np.array([np.cos(a), np.sin(a)])
 
 
-class FormationController(ObstacleLists, LeaderTrail):
+class FormationController(BaseController):
     """Leader-follower formation with the goal-aware field, width ratio gamma and modes kappa (SPEC §3)."""
 
     needs = Needs(goals=True, v2v=True)
@@ -167,11 +161,10 @@ class FormationController(ObstacleLists, LeaderTrail):
     stats_keys = Keys(("formation_min_gamma",), nested=("formation_kappa_steps", "formation_mode_log"))  # stats()
 
     def __init__(self, params: FormationParams, ctx):
-        self.p = params
+        super().__init__(params, ctx)
         self.step_s = float(ctx.step_s)
-        self.tasks: dict[str, EgoTask] = {}
-        self._set_static(tuple(ctx.obstacles))
-        # on a road (no [arena]) the formation drives in the leader's route frame (formation_road.py)
+        self.sensing = ObstacleLists(params, tuple(ctx.obstacles))  # what the members know
+        # on a road (no [arena]) the formation drives in the leader's route frame (road_frame.py, lane_plan.py)
         self._on_road, self.road = getattr(ctx, "road", None) is not None and getattr(ctx, "walls", None) is None, None
         self.lanes = LaneFormation(params, ctx) if self._on_road and params.road == "lanes" else None
         self.order: list[str] = []
@@ -181,31 +174,28 @@ class FormationController(ObstacleLists, LeaderTrail):
         self.kappa_steps = [0, 0, 0]
         self.log: list[list[float]] = []  # [time_s, kappa] at every change
         self.gamma_min_seen = np.inf
-        self._init_trail()
+        self.trail = LeaderTrail(params)  # the leader's path
         self.last = {}  # the last step's gamma, W, W_max, gamma_min (tests, plots)
 
     def v2v_params(self) -> V2VParams:
         return V2VParams(self.p.delay_s, self.p.pos_noise_m, self.p.vel_noise_mps, 0.0, 0.1, 0.0)
 
     def add_ego(self, task: EgoTask) -> None:
-        self.tasks[task.vid] = task
+        super().add_ego(task)
         if self.lanes is not None:
             self.lanes.add_ego(task)
         if not self.order or task.vid not in self.order:
             self.order = member_order(self.p, set(self.tasks) | set(self.order))
-            self.offsets = ff.slots(self.p.shape, len(self.order), self.p.spacing_m, self.p.apex_deg)
+            self.offsets = slots(self.p.shape, len(self.order), self.p.spacing_m, self.p.apex_deg)
 
     def remove_ego(self, vid: str) -> None:
-        self.tasks.pop(vid, None)
+        super().remove_ego(vid)
         if self.lanes is not None:
             self.lanes.remove_ego(vid)
 
     def stats(self) -> dict:
         return {"formation_kappa_steps": list(self.kappa_steps), "formation_mode_log": self.log,
                 "formation_min_gamma": float(self.gamma_min_seen) if np.isfinite(self.gamma_min_seen) else None}
-
-    def tables(self) -> dict:
-        return {}
 
     def _repulsion(self, pos, heading, length, width, goal, polys, mask) -> np.ndarray:
         """Goal-aware repulsion (E,2) of each ego from the obstacles it feels, before the reshaping."""
@@ -303,7 +293,7 @@ class FormationController(ObstacleLists, LeaderTrail):
             return self._act(obs, goals)
         if self.road is None:
             self.road = RoadFrame(self.tasks[leader])
-            self._set_static(self.road.polygons(self.static))
+            self.sensing.set_static(self.road.polygons(self.sensing.static))
         lk = ids.index(leader) if leader in ids else None  # once the leader has left: the frame at a follower
         fobs = self.road.enter(obs, obs.ego_rows[0 if lk is None else lk])
         goals = self.road.to_frenet(goals, self.road.s_lead)
@@ -319,9 +309,10 @@ class FormationController(ObstacleLists, LeaderTrail):
         heading, length, width = snap.heading[rows], snap.length[rows], snap.width[rows]
         leader = self.order[0] if self.order else None
         lk = ids.index(leader) if leader in ids else None
-        if lk is None and len(self.trail) > 1:
-            goals = self._lost_goals(ids, own_pos, goals, snap.time_s)
-        polys, mask, lead_only, static, hvel, smask = self._obstacles(obs, rows[lk] if lk is not None else None, nb_pos)
+        if lk is None and len(self.trail.path) > 1:
+            goals = self.trail.lost_goals(ids, own_pos, goals, snap.time_s)
+        polys, mask, lead_only, static, hvel, smask = self.sensing.lists(obs, rows[lk] if lk is not None else None, nb_pos,
+                                                                         self.order, self.road is not None)
         haz = (polys, smask, static, hvel)
         fmask = mask if self.road is None else self.road.field_mask(own_pos, length, width, polys, mask, lk, p.clear_m)
         rep = self._repulsion(own_pos, heading, length, width, goals, polys, fmask)
@@ -355,11 +346,11 @@ class FormationController(ObstacleLists, LeaderTrail):
         self._mode(own_pos[lk], goals[lk], polys, lead_only, rel[:, 0] * c + rel[:, 1] * s, -rel[:, 0] * s + rel[:, 1] * c,
                    float(length[lk]), float(width[lk]), snap.time_s)
         scale = self.scale if self.kappa == 2 else 1.0
-        self._extend_trail(nb_pos[lk])
+        self.trail.extend(nb_pos[lk])
         if self.kappa == 3 and p.broken == "trail":
-            slot_pos = self._trail_points(k_slot * p.spacing_m)
+            slot_pos = self.trail.points(k_slot * p.spacing_m)
         else:
-            slot_pos = ff.to_world(self.offsets[k_slot], nb_pos[lk], self.frame, scale)
+            slot_pos = to_world(self.offsets[k_slot], nb_pos[lk], self.frame, scale)
         err = slot_pos - own_pos
         fol = np.arange(len(ids)) != lk
         e_rms = float(np.sqrt((err[fol] ** 2).sum(axis=1).mean())) if fol.any() else 0.0

@@ -1,7 +1,7 @@
 """What each member of the ``formation`` controller knows of its surroundings (docs/formation.md,
 "Sensing and V2V"): the static obstacles, other vehicles and radar returns as one list of convex
 polygons with, per member, which it feels in its field and which in its safety shield, and the hulls
-over gaps no member passes (:func:`.formation_field.bridges`)."""
+over gaps no member passes (:func:`.field.bridges`)."""
 from __future__ import annotations
 
 import numpy as np
@@ -13,19 +13,26 @@ from sumo_avoid.sensing.perception import radar_obstacles
 
 
 class ObstacleLists:
-    """Mixed into :class:`~sumo_avoid.control.formation.formation.FormationController` (needs ``p``, ``order``,
-    ``road``)."""
+    """The static obstacles a formation knows (``set_static``: in the plane, or mapped into the
+    leader's route frame on a road) and, each step, the lists of everything its members know
+    (:meth:`lists`); owned by :class:`~sumo_avoid.control.formation.formation.FormationController`."""
 
-    def _set_static(self, polys) -> None:
+    def __init__(self, params, static_polys):
+        self.p = params  # FormationParams
+        self.set_static(static_polys)
+
+    def set_static(self, polys) -> None:
         self.static = tuple(polys)
         self._static_polys = pad_polygons(self.static) if self.static else np.zeros((0, 4, 2))
         self._static_c = np.array([o.mean(axis=0) for o in self.static]).reshape(-1, 2)
         self._static_r = np.array([np.hypot(*(o - o.mean(axis=0)).T).max() for o in self.static])
         self._bridges = None  # (hulls, pairs) of the gaps no member's disc passes: ff.bridges, at the first step
 
-    def _obstacles(self, obs: Observation, lead_row, member_pos):
+    def lists(self, obs: Observation, lead_row, member_pos, members, shared: bool):
         """(polys (O,K,2), mask (E,O) which ego's field feels which, leader's (O,) bool, static (O,) bool,
-        velocities (O,2), shield mask (E,O)). The leader's list is shared with every member (V2V); what a
+        velocities (O,2), shield mask (E,O)); ``members``: the formation's ids (known over V2V, no
+        obstacles); ``shared``: every member knows everything (ground truth in the leader's route
+        frame on a road). The leader's list is shared with every member (V2V); what a
         follower senses itself (its radar; truth: within ``sense_radius_m`` of it) it adds for itself (a
         follower strung out 50 m behind the leader, its field blind to what it passed, was driven into
         obstacles the shield then held it at for good: arena seed 46). The hulls over gaps too narrow to
@@ -34,7 +41,7 @@ class ObstacleLists:
         parts, know, vel, shut = [], [], [], []  # know (E, n): which member knows which; shut: a hull
         if obs.detections is None:  # around every member
             where, r = snap.pos[obs.ego_rows], self.p.sense_radius_m
-            lead = lead_row is not None and self.road is None  # on a road everyone shares everything
+            lead = lead_row is not None and not shared
             lk = int(np.flatnonzero(np.asarray(obs.ego_rows) == lead_row)[0]) if lead else None
             if len(self.static):
                 k = np.hypot(*(self._static_c[None] - where[:, None]).transpose(2, 0, 1)) - self._static_r <= r
@@ -48,7 +55,7 @@ class ObstacleLists:
                 know.append(hk)
                 vel.append(np.full((len(hulls), 2), np.nan))
                 shut.append(np.r_[np.zeros(int(near.sum()), bool), np.ones(len(hulls), bool)])
-            members = set(self.order)
+            members = set(members)
             o = np.array([k for k, v in enumerate(snap.ids) if v not in members], int)
             if len(o):
                 k = np.hypot(*(snap.pos[o][None] - where[:, None]).transpose(2, 0, 1)) <= r
@@ -82,7 +89,7 @@ class ObstacleLists:
 
     def _shut_gaps(self, know, length, width):
         """Hulls closing the gaps between the static obstacles that no member's disc passes
-        (:func:`.formation_field.bridges`; the field goes round them, the shield still sees only the
+        (:func:`.field.bridges`; the field goes round them, the shield still sees only the
         obstacles): ((B, H, 2), (E, B) which member knows both obstacles, from ``know`` (E, O))."""
         if self._bridges is None:
             r = float(0.5 * np.hypot(length, width).max())

@@ -1,6 +1,6 @@
 """The formation controller's safety shield: a velocity barrier no choice of gains can override.
 
-The potential field (:mod:`.formation_field`) only *prefers* distance from an obstacle: how much
+The potential field (:mod:`.field`) only *prefers* distance from an obstacle: how much
 depends on eta_re / eta_at, and a tuner that is scored on speed learns to weaken the repulsion (the
 Lévy-tuned gains of the first study scraped obstacles in 9 of 50 runs). The shield is applied to
 every member's velocity command after the field, and keeps for each hazard the discrete-time

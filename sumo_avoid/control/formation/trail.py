@@ -1,5 +1,5 @@
-"""The leader's recorded path, mixed into :class:`~sumo_avoid.control.formation.formation.FormationController`
-(needs ``p``): the trail the followers follow when the formation is broken up (``broken = "trail"``)
+"""The leader's recorded path, owned by :class:`~sumo_avoid.control.formation.formation.FormationController`:
+the trail the followers follow when the formation is broken up (``broken = "trail"``)
 and the way back for a follower lost in a pocket of the field after the leader has left."""
 from __future__ import annotations
 
@@ -11,29 +11,30 @@ import numpy as np
 class LeaderTrail:
     """The leader's path (a point every 0.5 m) and the followers that follow it after the leader left."""
 
-    def _init_trail(self) -> None:
-        self.trail = np.zeros((0, 3))  # the leader's path: x, y, arc length s (a point every 0.5 m)
+    def __init__(self, params):
+        self.p = params  # FormationParams
+        self.path = np.zeros((0, 3))  # the leader's path: x, y, arc length s (a point every 0.5 m)
         self._progress: dict[str, deque] = {}  # follower -> (time, distance to its goal) once the leader is done
         # follower -> how far it came along the leader's path while it follows it (_lost_goals); None once it
         # reached the path's end
         self._lost: dict[str, float | None] = {}
 
-    def _extend_trail(self, pos) -> None:
-        if not len(self.trail):
-            self.trail = np.array([[pos[0], pos[1], 0.0]])
+    def extend(self, pos) -> None:
+        if not len(self.path):
+            self.path = np.array([[pos[0], pos[1], 0.0]])
             return
-        d = float(np.hypot(*(pos - self.trail[-1, :2])))
+        d = float(np.hypot(*(pos - self.path[-1, :2])))
         if d >= 0.5:
-            self.trail = np.vstack([self.trail, [pos[0], pos[1], self.trail[-1, 2] + d]])
+            self.path = np.vstack([self.path, [pos[0], pos[1], self.path[-1, 2] + d]])
 
-    def _trail_points(self, back_m) -> np.ndarray:
+    def points(self, back_m) -> np.ndarray:
         """(E, 2) points of the trail ``back_m`` (E,) metres behind its newest point (its first
         point if the trail is shorter)."""
-        s = np.maximum(self.trail[-1, 2] - np.asarray(back_m, float), 0.0)
-        return np.column_stack([np.interp(s, self.trail[:, 2], self.trail[:, 0]),
-                                np.interp(s, self.trail[:, 2], self.trail[:, 1])])
+        s = np.maximum(self.path[-1, 2] - np.asarray(back_m, float), 0.0)
+        return np.column_stack([np.interp(s, self.path[:, 2], self.path[:, 0]),
+                                np.interp(s, self.path[:, 2], self.path[:, 1])])
 
-    def _lost_goals(self, ids, pos, goals, t: float) -> np.ndarray:
+    def lost_goals(self, ids, pos, goals, t: float) -> np.ndarray:
         """Goals (E, 2) once the leader is at its goal: a follower that came less than ``lost_progress_m``
         nearer its own goal within ``lost_window_s`` is caught in a pocket of the field (arena seed 35:
         circling in front of two obstacles until the end) and from then on aims at the point
@@ -50,10 +51,10 @@ class LeaderTrail:
             if vid not in self._lost and h[-1][0] - h[0][0] >= p.lost_window_s - 1e-9 and h[0][1] - h[-1][1] < p.lost_progress_m:
                 self._lost[vid] = 0.0
             if self._lost.get(vid) is not None:  # along the path, never back (its nearest point jumps)
-                s = max(self._lost[vid], float(self.trail[int(np.argmin(np.hypot(*(self.trail[:, :2] - pos[k]).T))), 2]))
-                if s + p.spacing_m < self.trail[-1, 2]:
+                s = max(self._lost[vid], float(self.path[int(np.argmin(np.hypot(*(self.path[:, :2] - pos[k]).T))), 2]))
+                if s + p.spacing_m < self.path[-1, 2]:
                     self._lost[vid] = s
-                    out[k] = self._trail_points([self.trail[-1, 2] - s - p.spacing_m])[0]
+                    out[k] = self.points([self.path[-1, 2] - s - p.spacing_m])[0]
                 else:  # at the path's end: to its goal, for good (aiming back at the path made it circle)
                     self._lost[vid] = None
         return out

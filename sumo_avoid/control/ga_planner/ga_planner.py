@@ -42,10 +42,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 
+from sumo_avoid.control.base_controller import BaseController
 from sumo_avoid.control.road_view import FrenetScene, RoadView
 from sumo_avoid.core.config import field_doc
+from sumo_avoid.core.types import EgoTask, Keys, Observation
 from sumo_avoid.road.polyline import arc_lengths, polyline_project
-from sumo_avoid.core.types import EgoTask, Keys, Needs, Observation
 from sumo_avoid.planning import kernels
 from sumo_avoid.planning.ga import GaParams, clearance, plan, resample
 from sumo_avoid.planning.pursuit import (
@@ -170,14 +171,12 @@ class _Ego:
     plans: list = field(default_factory=list)
 
 
-class GaPlannerController:
-    needs = Needs(goals=True)
-    metrics = ()
+class GaPlannerController(BaseController):
     stats_keys = Keys(("plans", "replans", "generations_to_usable", "generations_to_usable_max",  # stats()
                        "plans_usable_within_20", "plans_never_usable", "planner_reversals"))
 
     def __init__(self, params: GaPlannerParams, ctx):
-        self.p = params
+        super().__init__(params, ctx)
         self.rng = ctx.rng()
         self.truth_points = sampled_edges(ctx.obstacles, params.map_cell_m)
         self.bounds = arena_bounds(ctx.walls, params.wall_margin_m)
@@ -190,6 +189,7 @@ class GaPlannerController:
         kernels.warm()
 
     def add_ego(self, task: EgoTask) -> None:
+        super().add_ego(task)
         road = self.road and bool(task.lanes)
         p = self.pr if road else self.p
         # on a road the shadow is cast along the lane at plan time (planning/corridor.py whole_lanes)
@@ -199,6 +199,7 @@ class GaPlannerController:
                                 corridor=all_lanes_corridor(task.lanes) if road else None)
 
     def remove_ego(self, vid: str) -> None:
+        super().remove_ego(vid)
         st = self.egos.pop(vid)
         self.map_rows.extend((vid, *r) for r in st.map.rows)
 
