@@ -26,6 +26,7 @@ import tempfile
 import time
 
 from sumo_avoid.runs import worker
+from sumo_avoid.runs.job import RunOutcome
 from sumo_avoid.studies import batch, ledger
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -64,8 +65,8 @@ def _phases(results: list[dict], phases) -> str:
 
 
 def _marks(artifacts: pathlib.Path) -> dict:
-    res = json.loads((artifacts / "result.json").read_text())
-    return dict(res["marks"], cpu_s=res["cpu_s"])
+    res = RunOutcome.from_json(json.loads((artifacts / "result.json").read_text()))
+    return dict(res.clock_s, cpu_s=res.cpu_s)
 
 
 def measure(specs, workers: int, start: str, warm: bool) -> dict:

@@ -17,10 +17,10 @@ import tempfile
 
 from sumo_avoid.control import CONTROLLERS
 from sumo_avoid.core.config import ScenarioError, ScenarioErrors
-from sumo_avoid.runs import runner
+from sumo_avoid.runs import faults, runner, worker
+from sumo_avoid.runs.job import RunJob, RunOutcome
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.key_reference import format_reference
-from sumo_avoid.runs import isolate, worker
 from sumo_avoid.studies import batch, files, report, reproduce, suite, tune
 from sumo_avoid.sumo import console
 
@@ -52,7 +52,6 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--out", type=pathlib.Path, default=None, help="output folder (default: reports/runs/NAME-...)")
     r.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
-    r.add_argument("--inject-crash", default=None, help=argparse.SUPPRESS)  # test-only fault injection
     sub.add_parser("controllers", help="list the controllers")
     sub.add_parser("keys", help="print every scenario key (Markdown table)")
     for mod in (batch, suite, report, reproduce, tune):
@@ -76,12 +75,11 @@ def _summary(m: dict, out: pathlib.Path) -> str:
 
 
 def cmd_run(args) -> int:
-    """Validate, then run the scenario in a child process (the batch's worker run, forked from this
-    process: runs/isolate.py): a SUMO crash costs the child, and this one reports it in one line
-    (exit code 3)."""
+    """Validate, then run the scenario in a child process (the batch's child run, forked from this
+    process: runs/worker.py, start "here"): a SUMO crash costs the child, and this one reports it in
+    one line (exit code 3)."""
     scn = scenario.load(args.scenario, args.overrides, controller=args.controller, seed=args.seed)
-    if args.inject_crash is not None and args.inject_crash not in worker.CRASHES:
-        raise ScenarioError("<command line>", "--inject-crash", f"one of {list(worker.CRASHES)}", args.inject_crash)
+    faults.rules()  # test-only fault injection: a malformed SUMO_AVOID_INJECT_CRASH is refused now
     out = args.out
     if out is None:
         stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
@@ -90,37 +88,36 @@ def cmd_run(args) -> int:
     try:
         with tempfile.TemporaryDirectory(prefix="sumo-avoid-run-") as tmp:
             res = _run_child(args, scn, pathlib.Path(tmp))
-            if res["status"] == "done":
+            if res.ok:
                 _keep(pathlib.Path(tmp), out)
-            elif "bad_input" not in res:  # crashed: the log and a failure record, never metrics
+            elif res.bad_input is None:  # crashed: the log and a failure record, never metrics
                 _keep(pathlib.Path(tmp), out, only=("sumo.log",))
                 files.write_atomic(out / "failed.json", json.dumps(
-                    {"status": "failed", "error": res["error"], "where": res.get("where"), "scenario": str(scn.path),
+                    {"status": "failed", "error": res.error, "where": res.where, "scenario": str(scn.path),
                      "seed": scn.spec.sim.seed,
                      "controller": scn.spec.ego.controller}, indent=2, sort_keys=True) + "\n")
     except BaseException:
         files.remove_dirs(made)
         raise
-    if "bad_input" in res:  # input SUMO refused only once it ran: nothing written
+    if res.bad_input is not None:  # input SUMO refused only once it ran: nothing written
         files.remove_dirs(made)
-        print(f"sumo-avoid: error: {res['bad_input']}", file=sys.stderr)
+        print(f"sumo-avoid: error: {res.bad_input}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    if res["status"] != "done":
-        where = f" at {res['where']}" if res.get("where") else ""
-        print(f"sumo-avoid: error: {scn.path}: the run crashed: {res['error']}{where} (seed {scn.spec.sim.seed}; "
+    if not res.ok:
+        where = f" at {res.where}" if res.where else ""
+        print(f"sumo-avoid: error: {scn.path}: the run crashed: {res.error}{where} (seed {scn.spec.sim.seed}; "
               f"SUMO's log: {out / 'sumo.log'}, failure record: {out / 'failed.json'})", file=sys.stderr)
         return EXIT_CRASHED
-    print(_summary(res["metrics"], out))
+    print(_summary(res.metrics, out))
     print(f"  {console.summary_line(out / 'sumo.log')}")
     return 0
 
 
-def _run_child(args, scn, tmp: pathlib.Path) -> dict:
+def _run_child(args, scn, tmp: pathlib.Path) -> RunOutcome:
     """The run in a child process, a progress bar over its simulated time fed from a file."""
     show = not args.quiet and sys.stdout.isatty()
-    job = {"scenario": str(scn.path.resolve()), "seed": args.seed, "overrides": list(args.overrides),
-           "controller": args.controller, "inject_crash": args.inject_crash, "key": "run", "plots": not args.no_plots,
-           "progress_file": str(tmp / "progress") if show else None}
+    job = RunJob(str(scn.path.resolve()), args.seed, tuple(args.overrides), args.controller, plots=not args.no_plots,
+                 progress=show)
     bar = runner.Progress(scn.spec.sim.duration_s) if show else None
 
     def poll() -> None:
@@ -128,11 +125,11 @@ def _run_child(args, scn, tmp: pathlib.Path) -> dict:
             bar.bar.update(max(0.0, min(_sim_time(tmp / "progress"), bar.bar.total) - bar.bar.n))
 
     try:
-        res = isolate.run_forked(tmp, job, poll)
+        res = worker.run_in(tmp, job, start="here", poll=poll)
     finally:
         if bar is not None:
             bar.on_end()
-    if res["status"] == "done":  # what the run printed besides SUMO's messages, e.g. Python warnings
+    if res.ok:  # what the run printed besides SUMO's messages, e.g. Python warnings
         for line in console.leftover(tmp / "stderr.txt", tmp / "sumo.log"):
             print(line, file=sys.stderr)
     return res

@@ -2,33 +2,31 @@
 
 It imports what every run needs once, then forks one fresh child per job line on stdin, enforces
 each run's timeout (pidfd, race-free kill) and replies one JSON line per finished child on stdout.
-It never runs a simulation itself. The parent side (``_Server``, ``run_one``) and the run itself
-(``child``) live in :mod:`sumo_avoid.runs.worker`, which documents the whole scheme.
+It never runs a simulation itself. The parent side (``_Server``, ``run_in``) lives in
+:mod:`sumo_avoid.runs.worker`, which documents the whole scheme, the run itself in
+:mod:`sumo_avoid.runs.child`.
 """
 from __future__ import annotations
 
 import json
 import os
-import pathlib
 import select
 import signal
 import sys
 import time
-import traceback
 
+from sumo_avoid.runs.child import enter
 from sumo_avoid.sensing import occlusion
-from sumo_avoid.runs.watch import own_stdio
-from sumo_avoid.runs.worker import child, exit_now
 
 
 def serve(parent: int) -> int:
-    """Fork one child per job line on stdin; reply one JSON line per finished child on stdout.
+    """Fork one child per message line on stdin; reply one JSON line per finished child on stdout.
 
     Exits (killing its running children) on EOF on stdin or when ``parent`` is gone.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C: the batch process kills us (and ours)
     t0 = time.perf_counter()
-    # what every run needs, plots included, came with this module's imports (worker -> outputs,
+    # what every run needs, plots included, came with this module's imports (child -> outputs,
     # runner, plots); the radar's compiled kernel is loaded now (numba, from its on-disk cache)
     occlusion.warm()
 
@@ -37,7 +35,7 @@ def serve(parent: int) -> int:
 
     threads = len(os.listdir("/proc/self/task"))
     if threads > 1:
-        print(f"sumo_avoid.runs.worker: fork server has {threads} threads after its imports; forking it is unsafe",
+        print(f"sumo_avoid.runs.forkserver: fork server has {threads} threads after its imports; forking it is unsafe",
               file=sys.stderr)
     reply({"pid": os.getpid(), "import_s": time.perf_counter() - t0, "threads": threads})
     running: dict[int, dict] = {}  # pidfd -> {"pid", "id", "deadline", "timed_out", "fork_wall"}
@@ -63,18 +61,18 @@ def serve(parent: int) -> int:
                 buf += data
                 while b"\n" in buf:
                     line, buf = buf.split(b"\n", 1)
-                    job = json.loads(line)
-                    job["parent"] = os.getpid()
+                    msg = json.loads(line)
+                    msg["parent"] = os.getpid()
                     fork_wall = time.time()
                     try:
                         pid = os.fork()
                     except OSError as e:
-                        reply({"id": job["id"], "error": f"worker could not start: fork failed: {e}"})
+                        reply({"id": msg["id"], "error": f"worker could not start: fork failed: {e}"})
                         continue
-                    if pid == 0:
-                        _forked_child(job, list(running))
+                    if pid == 0:  # SIGINT stays ignored: on Ctrl-C the batch kills the server and so its children
+                        enter(msg, list(running))
                     pidfd = os.pidfd_open(pid)
-                    running[pidfd] = {"pid": pid, "id": job["id"], "deadline": time.monotonic() + job["timeout_s"],
+                    running[pidfd] = {"pid": pid, "id": msg["id"], "deadline": time.monotonic() + msg["timeout_s"],
                                       "timed_out": False, "fork_wall": fork_wall}
                     poller.register(pidfd, select.POLLIN)
             now = time.monotonic()
@@ -89,20 +87,6 @@ def serve(parent: int) -> int:
     finally:
         for fd in running:
             signal.pidfd_send_signal(fd, signal.SIGKILL)
-
-
-def _forked_child(job: dict, inherited_fds: list[int]) -> None:
-    """In the fresh child: own stdio, run the job, exit (never returns to the server loop)."""
-    rc = 1
-    try:
-        for fd in inherited_fds:
-            os.close(fd)
-        own_stdio(pathlib.Path(job["out"]))
-        rc = child(job)  # SIGINT stays ignored: on Ctrl-C the batch kills the server and so its children
-    except BaseException:
-        traceback.print_exc()
-    finally:
-        exit_now(rc)
 
 
 if __name__ == "__main__":

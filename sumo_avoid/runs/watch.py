@@ -1,7 +1,6 @@
-"""The run's side of a worker process besides the run itself: dying with the parent, its CPU time,
-the simulated time for the parent's progress bar (:class:`ProgressFile`), test-only crash injection
-(:func:`crash`, :class:`CrashAt`), and where a run that died by a signal died (:func:`crash_site`,
-from faulthandler's stack in its stderr).
+"""The run's side of a worker process besides the run itself: its own stdio, dying with the parent,
+its CPU time, the simulated time for the parent's progress bar (:class:`ProgressFile`), and where a
+run that died by a signal died (:func:`crash_site`, from faulthandler's stack in its stderr).
 """
 from __future__ import annotations
 
@@ -10,9 +9,6 @@ import pathlib
 import re
 import signal
 import time
-
-CRASH_AT_S = 1.0  # "segfault_mid_run": SIGSEGV once the simulation has run this long
-
 
 def own_stdio(out: pathlib.Path) -> None:
     """A fresh child's stdin from /dev/null, stdout and stderr into ``out``/stdout.txt, stderr.txt
@@ -45,15 +41,6 @@ def cpu_s() -> float | None:
     return usage.ru_utime + usage.ru_stime
 
 
-def crash(kind: str) -> None:
-    if kind == "segfault":
-        import ctypes
-
-        ctypes.string_at(0)  # NULL dereference: SIGSEGV
-    elif kind == "abort":
-        os.abort()
-
-
 def crash_site(stderr_file: pathlib.Path) -> str:
     """The innermost Python frame faulthandler wrote when the child died by a signal, e.g.
     ``libsumo/libsumo.py:3545 (start)`` ("" if none)."""
@@ -70,21 +57,6 @@ def crash_site(stderr_file: pathlib.Path) -> str:
             path = ("sumo_avoid/" if root == "/sumo_avoid/" else "") + path.rsplit(root, 1)[-1]
             break
     return f"{path}:{m.group(2)} ({m.group(3)})"
-
-
-class CrashAt:
-    """Rollout callback (test-only fault injection): a real SIGSEGV once simulated time reaches ``time_s``,
-    with SUMO running."""
-
-    def __init__(self, time_s: float):
-        self.time_s = time_s
-
-    def on_step(self, snap, n_steps: int) -> None:
-        if snap.time_s >= self.time_s:
-            crash("segfault")
-
-    def on_end(self) -> None:
-        pass
 
 
 class ProgressFile:

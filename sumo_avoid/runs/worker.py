@@ -1,7 +1,9 @@
-"""One run in its own process: ``run_one`` (parent side), the fork server and the run itself.
+"""One run in its own fresh process, parent side: :func:`run_in` / :func:`run_one` take a
+:class:`~sumo_avoid.runs.job.RunJob` and return its :class:`~sumo_avoid.runs.job.RunOutcome`.
 
-Every run is its own process, so a run that segfaults, aborts or hangs costs only itself. Two
-ways to start that process (``start``):
+Every run is its own process (libsumo runs one simulation per process), so a run that segfaults,
+aborts or hangs costs only itself. Three ways to start that process (``start``), one child
+(:func:`sumo_avoid.runs.child.run`):
 
 * ``"fork"`` (default on Linux): one warm **fork server** per parent process
   (``python -m sumo_avoid.runs.forkserver PARENT_PID``) imports numpy, pandas, shapely, libsumo and the
@@ -10,29 +12,26 @@ ways to start that process (``start``):
   nothing with it. The server enforces the run's timeout (``pidfd``, race-free kill) and reports
   the child's exit status. This removes the ~0.6 s of interpreter start and imports from every
   run (measured: ``benchmarks/batch.py``).
-* ``"spawn"``: a fresh ``python -m sumo_avoid.runs.worker JOB`` interpreter per run (the only way on
+* ``"spawn"``: a fresh ``python -m sumo_avoid.runs.child MESSAGE`` interpreter per run (the only way on
   systems without ``fork``/``pidfd``).
+* ``"here"``: a child forked from the calling process itself, which must be single-threaded and
+  has imported what a run needs (``sumo-avoid run``: a fork server would import everything a second
+  time, ~2.5 s); ``poll`` is called while it runs (a progress bar).
 
-Either way the child loads the scenario, runs it, writes its artifacts (metrics.json,
-trajectories.csv, plots, sumo.log) into a private temporary folder and, last, ``result.json``
-(atomically). The parent reads ``result.json`` or, if the child died without one, builds the
-failure from its exit status, and moves the folder to ``<root>/<key[:16]>``. ``run_one`` never
-raises for a failing run, so it works unchanged as a Dask task (each Dask worker process gets its
-own fork server).
-
-Test-only fault injection: ``inject_crash = "segfault"`` makes the child dereference a NULL
-pointer (a real SIGSEGV in native code), ``"abort"`` makes it call ``os.abort()``; both happen
-after the scenario is loaded, before SUMO starts; ``"segfault_mid_run"`` segfaults once the simulation has run
-``CRASH_AT_S`` (SUMO running). (A real input that segfaults SUMO 1.28:
-``tests/data/segfault_net.toml``, see docs/batch.md.)
+The child writes the run's artifacts into a private folder and, last, ``result.json``. The parent
+reads it or, if the child died without one, builds the outcome from its exit status; :func:`run_one`
+then moves the folder to ``<root>/<key[:16]>``. Neither raises for a failing run, so ``run_one``
+works unchanged as a Dask task (each Dask worker process gets its own fork server). Test-only
+fault injection (:mod:`sumo_avoid.runs.faults`) is read here, at dispatch, and sent beside the job.
 """
 from __future__ import annotations
 
 import atexit
+import dataclasses
 import datetime
-import faulthandler
 import functools
 import json
+import math
 import os
 import pathlib
 import shutil
@@ -43,26 +42,12 @@ import threading
 import time
 import uuid
 
-_IMPORT_START = (os.getpid(), time.time())  # a spawned run's interpreter imports what follows itself
+from sumo_avoid.runs import faults
+from sumo_avoid.runs.child import enter
+from sumo_avoid.runs.job import RunJob, RunOutcome
+from sumo_avoid.runs.watch import crash_site
 
-from sumo_avoid.runs import outputs as evaluate  # noqa: E402
-from sumo_avoid.core.config import ScenarioError  # noqa: E402
-from sumo_avoid.runs import runner  # noqa: E402
-from sumo_avoid.scenario import spec as scenario  # noqa: E402
-from sumo_avoid.runs.watch import (  # noqa: E402
-    CRASH_AT_S,
-    CrashAt,
-    ProgressFile,
-    cpu_s,
-    crash,
-    crash_site,
-    die_with_parent,
-)
-
-_IMPORTED = time.time()
-
-CRASHES = ("segfault", "abort", "segfault_mid_run")
-STARTS = ("fork", "spawn")
+STARTS = ("fork", "spawn")  # what a batch may choose (``"here"`` is for a single-threaded caller: run_in)
 # One run per core: BLAS thread pools would only oversubscribe the cores, and the fork server
 # must stay single-threaded to fork safely.
 CHILD_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
@@ -119,78 +104,77 @@ def _child_env() -> dict:
 
 
 # --- parent side ------------------------------------------------------------------------------
-def run_one(spec: dict, root: str, timeout_s: float, start: str | None = None) -> dict:
-    """Run one spec (RunSpec.to_json()) in its own process; return its result dict (never raises).
+def run_one(job: RunJob, root: str, timeout_s: float, start: str | None = None) -> RunOutcome:
+    """Run ``job`` in its own process with its artifacts in ``<root>/<key[:16]>``; never raises.
 
     ``start``: ``"fork"`` (from the warm fork server) or ``"spawn"`` (fresh interpreter);
     default :func:`default_start`.
     """
     root_p = pathlib.Path(root).absolute()  # the fork server's working directory may not be ours
-    tmp = root_p / ".tmp" / f"{spec['key'][:16]}-{uuid.uuid4().hex[:8]}"
+    tmp = root_p / ".tmp" / f"{job.key[:16]}-{uuid.uuid4().hex[:8]}"
     tmp.mkdir(parents=True, exist_ok=True)
-    res = run_in(tmp, spec, timeout_s, start)
-    (tmp / "result.json").write_text(json.dumps(res, sort_keys=True))  # now with the parent's side and timings
-    final = root_p / spec["key"][:16]
+    res = run_in(tmp, job, timeout_s, start)
+    (tmp / "result.json").write_text(json.dumps(res.to_json(), sort_keys=True))  # now with the parent's side
+    final = root_p / job.key[:16]
     if final.exists():  # left over from an unfinished earlier attempt (done runs are never re-run)
         shutil.rmtree(final)
     os.replace(tmp, final)
-    res["artifacts"] = str(final)
-    return res
+    return dataclasses.replace(res, artifacts=str(final))
 
 
-def run_in(tmp: pathlib.Path, spec: dict, timeout_s: float, start: str | None = None) -> dict:
-    """Run one spec in its own process with ``tmp`` (an existing folder) as its output folder;
-    return its result dict (never raises for a failing run). (``sumo-avoid run`` forks its one run
-    from its own process instead: :mod:`sumo_avoid.runs.isolate`.)"""
+def run_in(tmp: pathlib.Path, job: RunJob, timeout_s: float = math.inf, start: str | None = None,
+           poll=None, every_s: float = 0.2) -> RunOutcome:
+    """Run ``job`` in its own process with ``tmp`` (an existing folder) as its output folder; return
+    its outcome (never raises for a failing run; an interrupt kills the child and is raised).
+    ``start``: ``"fork"``, ``"spawn"`` or ``"here"`` (module doc); ``poll()``: ``"here"`` only, every ``every_s``."""
     start = start or default_start()
-    if start not in STARTS:
-        raise ValueError(f"start must be one of {STARTS}, not {start!r}")
+    if start not in (*STARTS, "here"):
+        raise ValueError(f"start must be one of {(*STARTS, 'here')}, not {start!r}")
+    tmp = pathlib.Path(tmp).absolute()
+    job = dataclasses.replace(job, out_dir=str(tmp))
     started, t0 = now(), time.perf_counter()
-    job = dict(spec, out=str(pathlib.Path(tmp).absolute()), timeout_s=timeout_s, id=pathlib.Path(tmp).name)
+    message = {"job": job.to_json(), "id": tmp.name, "timeout_s": timeout_s, "parent": os.getpid(),
+               "crash": faults.crash_for(job), "dispatch_wall": time.time()}
     if start == "fork":
-        status = _run_forked(job, timeout_s)
+        status = _run_forked(message, timeout_s)
+    elif start == "spawn":
+        status = _run_spawned(message, tmp, timeout_s)
     else:
-        status = _run_spawned(job, pathlib.Path(tmp), timeout_s)
-    res = result_of(pathlib.Path(tmp), status, timeout_s)
-    res.update(started_at=started, ended_at=now(), wall_s=time.perf_counter() - t0, start=start)
-    res["marks"]["ended_wall"] = time.time()
-    return res
+        status = _run_here(message, timeout_s, poll, every_s)
+    res = outcome_of(tmp, status, timeout_s)
+    return dataclasses.replace(res, started_at=started, ended_at=now(), wall_s=time.perf_counter() - t0, start=start,
+                               clock_s=dict(res.clock_s, ended_wall=time.time()))
 
 
-def result_of(tmp: pathlib.Path, status: dict, timeout_s: float) -> dict:
-    """The run's result: its result.json, or the failure its exit status tells."""
+def outcome_of(tmp: pathlib.Path, status: dict, timeout_s: float) -> RunOutcome:
+    """The run's outcome: its result.json, or the failure its exit status tells."""
     res_file = tmp / "result.json"
     rc, timed_out = status.get("rc"), status.get("timed_out", False)
     if res_file.is_file() and not timed_out:
-        res = json.loads(res_file.read_text())
+        res = RunOutcome.from_json(json.loads(res_file.read_text()))
     elif timed_out:
-        res = {"status": "failed", "error": f"timeout: run exceeded {timeout_s:g} s and was killed"}
+        res = RunOutcome("timeout", error=f"timeout: run exceeded {timeout_s:g} s and was killed")
     elif status.get("error"):
-        res = {"status": "failed", "error": status["error"]}
+        res = RunOutcome("crashed", error=status["error"])
     elif rc < 0:
-        res = {"status": "failed", "error": f"worker died: {_signal_name(-rc)}"}
-        where = crash_site(tmp / "stderr.txt")
-        if where:
-            res["where"] = where
+        res = RunOutcome("crashed", error=f"worker died: {_signal_name(-rc)}", where=crash_site(tmp / "stderr.txt") or None)
     else:
         tail = _last_line(tmp / "stderr.txt")
-        res = {"status": "failed", "error": f"worker exited with code {rc} and no result" + (f": {tail}" if tail else "")}
-    marks = dict(res.get("marks", {}), **{k: v for k, v in status.items() if k.endswith("_wall")})
-    if "sumo_start_wall" in marks:
-        res["overhead_s"] = marks["sumo_start_wall"] - marks["dispatch_wall"]
-    res["marks"] = marks
-    return res
+        res = RunOutcome("crashed", error=f"worker exited with code {rc} and no result" + (f": {tail}" if tail else ""))
+    clock = dict(res.clock_s, **{k: v for k, v in status.items() if k.endswith("_wall")})
+    overhead = clock["sumo_start_wall"] - clock["dispatch_wall"] if "sumo_start_wall" in clock else None
+    return dataclasses.replace(res, clock_s=clock, overhead_s=overhead)
 
 
-def _run_spawned(job: dict, tmp: pathlib.Path, timeout_s: float) -> dict:
-    job.update(dispatch_wall=time.time(), parent=os.getpid())
+def _run_spawned(message: dict, tmp: pathlib.Path, timeout_s: float) -> dict:
+    message["dispatch_wall"] = time.time()
     with open(tmp / "stdout.txt", "wb") as out, open(tmp / "stderr.txt", "wb") as err:
-        proc = subprocess.Popen([sys.executable, "-m", "sumo_avoid.runs.worker", json.dumps(job)],
+        proc = subprocess.Popen([sys.executable, "-m", "sumo_avoid.runs.child", json.dumps(message)],
                                 stdout=out, stderr=err, stdin=subprocess.DEVNULL, env=_child_env())
         with _LIVE_LOCK:
             _LIVE.add(proc)
         try:
-            rc = proc.wait(timeout=timeout_s)
+            rc = proc.wait(timeout=None if math.isinf(timeout_s) else timeout_s)
             timed_out = False
         except subprocess.TimeoutExpired:
             proc.kill()
@@ -203,11 +187,42 @@ def _run_spawned(job: dict, tmp: pathlib.Path, timeout_s: float) -> dict:
         finally:
             with _LIVE_LOCK:
                 _LIVE.discard(proc)
-    return {"rc": rc, "timed_out": timed_out, "dispatch_wall": job["dispatch_wall"], "reaped_wall": time.time()}
+    return {"rc": rc, "timed_out": timed_out, "dispatch_wall": message["dispatch_wall"], "reaped_wall": time.time()}
+
+
+def _run_here(message: dict, timeout_s: float, poll, every_s: float) -> dict:
+    """A child forked from this (single-threaded) process; ``poll()`` every ``every_s`` while it runs."""
+    for stream in (sys.stdout, sys.stderr):
+        stream.flush()
+    message["dispatch_wall"] = time.time()
+    deadline = time.monotonic() + timeout_s
+    pid = os.fork()
+    if pid == 0:  # pragma: no cover - the child's own process
+        enter(message)
+    timed_out = False
+    try:
+        while True:
+            done, status = os.waitpid(pid, os.WNOHANG)
+            if done:
+                break
+            if time.monotonic() >= deadline and not timed_out:
+                os.kill(pid, signal.SIGKILL)
+                timed_out = True
+            if poll is not None:
+                poll()
+            time.sleep(every_s)
+    except BaseException:  # Ctrl-C: the child goes too
+        os.kill(pid, signal.SIGKILL)
+        os.waitpid(pid, 0)
+        raise
+    if poll is not None:
+        poll()
+    return {"rc": os.waitstatus_to_exitcode(status), "timed_out": timed_out, "dispatch_wall": message["dispatch_wall"],
+            "reaped_wall": time.time()}
 
 
 class _Server:
-    """Parent side of one fork server: writes jobs to its stdin, a reader thread hands the replies
+    """Parent side of one fork server: writes dispatch messages to its stdin, a reader thread hands the replies
     (one JSON line per finished run, matched by job id) to the waiting ``run_one`` calls."""
 
     def __init__(self):
@@ -237,18 +252,18 @@ class _Server:
         for w in waiters:
             w[0].set()
 
-    def submit(self, job: dict) -> list | None:
-        """Hand a job over; None if the server is gone."""
+    def submit(self, message: dict) -> list | None:
+        """Hand a run over; None if the server is gone."""
         waiter = [threading.Event(), None]
         with self.lock:
             if self.dead is not None:
                 return None
-            self.waiting[job["id"]] = waiter
+            self.waiting[message["id"]] = waiter
             try:
-                self.proc.stdin.write(json.dumps(job).encode() + b"\n")
+                self.proc.stdin.write(json.dumps(message).encode() + b"\n")
                 self.proc.stdin.flush()
             except (BrokenPipeError, ValueError):  # died (or was closed) since: the reader will notice
-                self.waiting.pop(job["id"], None)
+                self.waiting.pop(message["id"], None)
                 return None
         return waiter
 
@@ -309,83 +324,21 @@ def shutdown() -> None:
 atexit.register(shutdown)
 
 
-def _run_forked(job: dict, timeout_s: float) -> dict:
-    job["dispatch_wall"] = time.time()
+def _run_forked(message: dict, timeout_s: float) -> dict:
+    message["dispatch_wall"] = dispatched = time.time()
     server = _server()
-    waiter = server.submit(job)
+    waiter = server.submit(message)
     if waiter is None:  # it died between runs (e.g. killed by hand): one fresh start, then give up
         server = _server()
-        waiter = server.submit(job)
+        waiter = server.submit(message)
     if waiter is None:
-        return {"error": f"worker died: the fork server {server.dead}", "dispatch_wall": job["dispatch_wall"]}
-    if not waiter[0].wait(timeout_s + SERVER_GRACE_S):  # the server itself hangs: nothing else can stop the run
+        return {"error": f"worker died: the fork server {server.dead}", "dispatch_wall": dispatched}
+    if not waiter[0].wait(None if math.isinf(timeout_s) else timeout_s + SERVER_GRACE_S):  # the server itself hangs: nothing else can stop the run
         server.kill()
-        return {"timed_out": True, "dispatch_wall": job["dispatch_wall"]}
+        return {"timed_out": True, "dispatch_wall": dispatched}
     reply = waiter[1]
     if reply is None:
-        return {"error": f"worker died: the fork server {server.dead}", "dispatch_wall": job["dispatch_wall"]}
+        return {"error": f"worker died: the fork server {server.dead}", "dispatch_wall": dispatched}
     reply["notified_wall"] = time.time()
-    reply["dispatch_wall"] = job["dispatch_wall"]
+    reply["dispatch_wall"] = dispatched
     return reply
-
-
-def exit_now(rc: int) -> None:
-    """Flush stdio and exit without the interpreter's teardown: nothing in it is needed once
-    result.json is written, and in a spawned worker it took 0.40 s (median, benchmarks/batch.py on
-    a loaded 2-core machine) of freeing pandas, numpy, libsumo...; 0.05 s from result to reaped
-    with this."""
-    for stream in (sys.stdout, sys.stderr):
-        try:
-            stream.flush()
-        except Exception:
-            pass
-    os._exit(rc)
-
-
-# --- the run (in the child) ---------------------------------------------------------------------
-def child(job: dict) -> int:
-    own_imports = _IMPORT_START[0] == os.getpid()  # spawned: this process imported the run's modules
-    marks = {"entry_wall": _IMPORT_START[1] if own_imports else time.time()}
-    faulthandler.enable(file=2)  # a fatal signal writes the Python stack to stderr.txt: where the run died
-    die_with_parent()
-    if os.getppid() != job["parent"]:  # the parent died before prctl took effect
-        return 3
-    out = pathlib.Path(job["out"])
-
-    def finish(res: dict) -> None:
-        res["marks"] = marks
-        part = out / "result.json.part"
-        part.write_text(json.dumps(res, sort_keys=True))
-        os.replace(part, out / "result.json")
-
-    try:
-        marks["imported_wall"] = _IMPORTED if own_imports else time.time()
-        scn = scenario.load(job["scenario"], job["overrides"], controller=job["controller"], seed=job["seed"])
-        marks["loaded_wall"] = time.time()
-        kind = job.get("inject_crash")
-        if kind in ("segfault", "abort"):
-            crash(kind)
-        t_run = time.time()
-        watch = [ProgressFile(job["progress_file"])] if job.get("progress_file") else []
-        if kind == "segfault_mid_run":
-            watch.append(CrashAt(CRASH_AT_S))
-        res = runner.run(scn, log_file=out / "sumo.log", progress=False, callbacks=watch)
-        marks["sumo_start_wall"] = t_run + res.timings.get("setup_s", 0.0)  # road and controllers set up
-        marks["run_end_wall"] = time.time()
-        m = evaluate.write_outputs(res, out, plots=scn.spec.output.plots and job.get("plots", True))
-        marks["written_wall"] = time.time()
-        finish({"status": "done", "metrics": m, "timings": res.timings, "cpu_s": cpu_s()})
-        return 0
-    except ScenarioError as e:  # bad input found only once SUMO ran: the caller reports it as such
-        finish({"status": "failed", "error": f"ScenarioError: {e}"[:500], "bad_input": str(e)})
-        return 1
-    except Exception as e:  # recorded as the run's failure, one line
-        msg = str(e).strip().splitlines()[0] if str(e).strip() else ""
-        finish({"status": "failed", "error": f"{type(e).__name__}: {msg}"[:500]})
-        return 1
-
-
-
-
-if __name__ == "__main__":
-    exit_now(child(json.loads(sys.argv[1])))

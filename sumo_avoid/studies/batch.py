@@ -27,10 +27,11 @@ from tqdm import tqdm
 from sumo_avoid.core.config import ScenarioError, ScenarioErrors, build
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.spec import MAX_SEED, read_toml
+from sumo_avoid.runs import faults, worker
+from sumo_avoid.runs.job import RunJob, RunOutcome
+from sumo_avoid.runs.worker import kill_all, run_one
 from sumo_avoid.studies import ledger as ledger_mod
-from sumo_avoid.runs import worker
 from sumo_avoid.studies.files import BatchFile
-from sumo_avoid.runs.worker import CRASHES, kill_all, run_one
 
 KEY_VERSION = b"sumo_avoid-run-key-v1"
 MAX_SEEDS = 100_000  # seeds of one --seeds / seeds value: more is a typo (0-1000000000), not a study
@@ -38,13 +39,12 @@ MAX_SEEDS = 100_000  # seeds of one --seeds / seeds value: more is a typo (0-100
 
 @dataclass(frozen=True)
 class RunSpec:
-    """One run of a batch. ``inject_crash`` is test-only fault injection (see docs/batch.md)."""
+    """One run of a batch: its job and what its ledger row says about it."""
 
     scenario: str  # absolute path of the scenario file
     seed: int
     overrides: tuple[str, ...] = ()
     controller: str | None = None
-    inject_crash: str | None = None
     key: str = ""
     name: str = ""  # scenario name (filled by plan())
     effective_controller: str = ""
@@ -52,10 +52,8 @@ class RunSpec:
     plots: bool = True  # the run writes plots (output.plots)
     bad_input: str | None = None  # --keep-going: the input's error; the run is recorded failed, never started
 
-    def to_json(self) -> dict:
-        return {"scenario": self.scenario, "seed": self.seed, "overrides": list(self.overrides),
-                "controller": self.controller, "inject_crash": self.inject_crash, "key": self.key,
-                "plots": self.plots}
+    def job(self) -> RunJob:
+        return RunJob(self.scenario, self.seed, self.overrides, self.controller, plots=self.plots, key=self.key)
 
 
 @dataclass(frozen=True)
@@ -105,24 +103,23 @@ def _file_digest(path: pathlib.Path) -> bytes:
     return _hash_cache[k]
 
 
-def plan(scenario_path, seed: int, overrides=(), controller=None, inject_crash=None) -> RunSpec:
+def plan(scenario_path, seed: int, overrides=(), controller=None) -> RunSpec:
     """Validate one run (raises ScenarioError) and compute its key: sha256 of the scenario file,
-    the net/route/additional files it references, the overrides, controller, seed (and crash)."""
+    the net/route/additional files it references, the overrides, controller and seed."""
     path = pathlib.Path(scenario_path).resolve()
     scn = scenario.load(path, list(overrides), controller=controller, seed=seed)
-    if inject_crash is not None and inject_crash not in CRASHES:
-        raise ScenarioError(str(path), "inject_crash", f"one of {sorted(CRASHES)}", inject_crash)
     h = hashlib.sha256(KEY_VERSION)
     for f in (path, scn.net_file, *scn.route_files, *scn.additional_files):
         h.update(_file_digest(f))
+    # "inject_crash": None keeps every key exactly what it was when test-only crash injection was part
+    # of the run (the ledgers in reports/ are keyed by it); injection now lives outside the key (runs/faults.py)
     h.update(json.dumps({"overrides": list(overrides), "controller": scn.spec.ego.controller,
-                         "seed": scn.spec.sim.seed, "inject_crash": inject_crash}, sort_keys=True).encode())
-    return RunSpec(str(path), scn.spec.sim.seed, tuple(overrides), controller, inject_crash, h.hexdigest(),
+                         "seed": scn.spec.sim.seed, "inject_crash": None}, sort_keys=True).encode())
+    return RunSpec(str(path), scn.spec.sim.seed, tuple(overrides), controller, h.hexdigest(),
                    scn.name, scn.spec.ego.controller, str(scn.net_file), scn.spec.output.plots)
 
 
-def expand(scenarios, seeds, overrides=(), controllers=(None,), grid: dict | None = None,
-           inject_crash=None) -> list[RunSpec]:
+def expand(scenarios, seeds, overrides=(), controllers=(None,), grid: dict | None = None) -> list[RunSpec]:
     """scenarios x controllers x grid points x seeds -> validated RunSpecs (duplicates dropped)."""
     grid = grid or {}
     keys = sorted(grid)
@@ -130,7 +127,7 @@ def expand(scenarios, seeds, overrides=(), controllers=(None,), grid: dict | Non
               for combo in itertools.product(*(grid[k] for k in keys))] if keys else [()]
     out, seen = [], set()
     for scn, ctl, point, seed in itertools.product(scenarios, controllers or (None,), points, seeds):
-        spec = plan(scn, seed, tuple(overrides) + point, ctl, inject_crash)
+        spec = plan(scn, seed, tuple(overrides) + point, ctl)
         if spec.key not in seen:
             seen.add(spec.key)
             out.append(spec)
@@ -149,9 +146,8 @@ def _toml_value(v) -> str:
 
 def load_batch_file(path) -> tuple[list[RunSpec], dict]:
     """A batch TOML: top-level ``workers``, ``ledger``, ``timeout_s``; ``[[runs]]`` tables with
-    ``scenario``, ``seeds``, optional ``set`` (list of KEY=VALUE), ``controllers``, ``grid``
-    (table: dotted key -> list of values) and test-only ``inject_crash``. Paths are relative
-    to the batch file. Returns (runs, options)."""
+    ``scenario``, ``seeds``, optional ``set`` (list of KEY=VALUE), ``controllers`` and ``grid``
+    (table: dotted key -> list of values). Paths are relative to the batch file. Returns (runs, options)."""
     path = pathlib.Path(path)
     file = str(path)
     bf = build(BatchFile, read_toml(path), file)
@@ -161,9 +157,7 @@ def load_batch_file(path) -> tuple[list[RunSpec], dict]:
         scn = (path.resolve().parent / e.scenario)
         if not scn.is_file():
             raise ScenarioError(file, f"runs[{i}].scenario", "an existing scenario file", e.scenario)
-        if e.inject_crash is not None and e.inject_crash not in CRASHES:
-            raise ScenarioError(file, f"runs[{i}].inject_crash", f"one of {list(CRASHES)}", e.inject_crash)
-        for s in expand([scn], seeds, e.set, e.controllers or (None,), e.grid, e.inject_crash):
+        for s in expand([scn], seeds, e.set, e.controllers or (None,), e.grid):
             if s.key not in seen:
                 seen.add(s.key)
                 specs.append(s)
@@ -178,12 +172,12 @@ def artifacts_root(ledger_path) -> pathlib.Path:
     return pathlib.Path(ledger_path).resolve().parent / "runs"
 
 
-def _row(spec: RunSpec, res: dict, root: pathlib.Path) -> dict:
+def _row(spec: RunSpec, res: RunOutcome, root: pathlib.Path) -> dict:
     return {"key": spec.key, "scenario": spec.name, "scenario_path": spec.scenario, "net_file": spec.net_file,
             "controller": spec.effective_controller, "seed": spec.seed, "overrides": json.dumps(list(spec.overrides)),
-            "status": res["status"], "error": res.get("error"), "started_at": res.get("started_at"),
-            "ended_at": res.get("ended_at"), "wall_s": res.get("wall_s"), "overhead_s": res.get("overhead_s"),
-            "artifacts": os.path.relpath(res["artifacts"], root.parent) if res.get("artifacts") else None,
+            "status": res.ledger_status, "error": res.error, "started_at": res.started_at, "ended_at": res.ended_at,
+            "wall_s": res.wall_s, "overhead_s": res.overhead_s,
+            "artifacts": os.path.relpath(res.artifacts, root.parent) if res.artifacts else None,
             "code": ledger_mod.code_version()}
 
 
@@ -213,7 +207,7 @@ class _Progress:
 
 def _local_results(specs, root, cfg: BatchConfig):
     with cf.ThreadPoolExecutor(max_workers=cfg.workers, thread_name_prefix="sumo-avoid-run") as ex:
-        futs = {ex.submit(run_one, s.to_json(), str(root), cfg.timeout_s, cfg.start): s for s in specs}
+        futs = {ex.submit(run_one, s.job(), str(root), cfg.timeout_s, cfg.start): s for s in specs}
         try:
             for fut in cf.as_completed(futs):
                 yield futs[fut], fut.result()
@@ -228,13 +222,13 @@ def _dask_results(specs, root, cfg: BatchConfig):
     from dask.distributed import Client, as_completed
 
     with Client(cfg.scheduler, set_as_default=False) as client:
-        futs = {client.submit(run_one, s.to_json(), str(root), cfg.timeout_s, cfg.start, key=f"sumo-avoid-{s.key}",
+        futs = {client.submit(run_one, s.job(), str(root), cfg.timeout_s, cfg.start, key=f"sumo-avoid-{s.key}",
                               pure=False): s for s in specs}
         for fut in as_completed(list(futs), loop=client.loop):
             try:
                 res = fut.result()
             except Exception as e:  # the Dask worker itself died, etc.
-                res = {"status": "failed", "error": f"dask: {type(e).__name__}: {e}".splitlines()[0]}
+                res = RunOutcome("failed", error=f"dask: {type(e).__name__}: {e}".splitlines()[0])
             yield futs[fut], res
 
 
@@ -261,14 +255,14 @@ def run_batch(cfg: BatchConfig, progress: bool | None = None, log=print) -> dict
         results = _dask_results if cfg.scheduler else _local_results
         try:
             for spec in (s for s in todo if s.bad_input is not None):  # --keep-going: failed with their cause
-                ledger_mod.record(con, _row(spec, {"status": "failed", "error": f"bad input: {spec.bad_input}"}, root))
+                ledger_mod.record(con, _row(spec, RunOutcome("failed", error=f"bad input: {spec.bad_input}"), root))
                 counts["failed"] += 1
                 bar.update(False)
             todo = [s for s in todo if s.bad_input is None]
             for spec, res in results(todo, root, cfg):
-                ledger_mod.record(con, _row(spec, res, root), res.get("metrics"))
-                counts[res["status"]] += 1
-                bar.update(res["status"] == "done")
+                ledger_mod.record(con, _row(spec, res, root), res.metrics)
+                counts[res.ledger_status] += 1
+                bar.update(res.ok)
         finally:
             bar.close()
     finally:
@@ -358,6 +352,7 @@ def workers_or_cores(n: int | None) -> int:
 
 def _check_flags(args) -> None:
     workers_or_cores(args.workers)
+    faults.rules()  # test-only fault injection: a malformed SUMO_AVOID_INJECT_CRASH is refused before any run
     if args.timeout is not None and not 0 < args.timeout < math.inf:
         raise ScenarioError("<command line>", "--timeout", "a positive number of seconds", args.timeout)
     if args.start is not None and args.start not in worker.STARTS:
@@ -374,7 +369,7 @@ def _bad_run(path, seed, overrides, controller, err: ScenarioError) -> RunSpec:
     h = hashlib.sha256(KEY_VERSION + b"bad-input")
     h.update(json.dumps({"path": str(path), "seed": seed, "overrides": list(overrides), "controller": controller,
                          "error": str(err)}, sort_keys=True).encode())
-    return RunSpec(str(path), seed if seed is not None else -1, tuple(overrides), controller, None, h.hexdigest(),
+    return RunSpec(str(path), seed if seed is not None else -1, tuple(overrides), controller, h.hexdigest(),
                    path.stem, controller or "", "", False, bad_input=str(err))
 
 

@@ -26,7 +26,6 @@ class BatchRuns:
     set: tuple[str, ...] = field_doc((), doc="KEY=VALUE overrides for every run of this table")
     controllers: tuple[str, ...] = field_doc((), doc="one run per controller (default: the scenario's)")
     grid: dict = field_doc(default_factory=dict, doc="dotted key -> list of values; one run per combination")
-    inject_crash: str | None = field_doc(None, doc="test-only fault injection (docs/batch.md)")
 
     def __post_init__(self):
         for k, v in self.grid.items():

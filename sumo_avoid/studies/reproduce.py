@@ -1,7 +1,8 @@
 """``sumo-avoid reproduce table4``: seed 000's Table 4 (SPEC §1.3) inside SUMO.
 
 Runs scenarios/arena_v{4,6,8}.toml (Table 3 presets) over K seeds, each run in its own process
-(libsumo allows one SUMO per process), and writes to DIR:
+forked from the batch's fork server (:mod:`sumo_avoid.runs.worker`; libsumo allows one SUMO per
+process), the run's child computing its Table 4 record (:func:`flocking_record`), and writes to DIR:
 
 * ``table4.csv``: ``v_flock, metric, ours_mean, ours_sd, paper_mean, paper_sd`` (one row per
   speed and per row of SPEC §1.3; metric names as in metrics.json; ``mu_best`` = best seed);
@@ -11,11 +12,13 @@ Runs scenarios/arena_v{4,6,8}.toml (Table 3 presets) over K seeds, each run in i
 """
 from __future__ import annotations
 
+import concurrent.futures as cf
 import json
-import multiprocessing
+import math
+import os
 import pathlib
 import sys
-import time
+import tempfile
 
 import numpy as np
 import pandas as pd
@@ -24,7 +27,9 @@ from sumo_avoid.core.config import ScenarioError
 from sumo_avoid.metrics import basic
 from sumo_avoid.metrics.flock_score import FlockingOrder
 from sumo_avoid.plots.arena_plots import plot_arena
-from sumo_avoid.runs import runner
+from sumo_avoid.rollout.result import RunResult
+from sumo_avoid.runs import worker
+from sumo_avoid.runs.job import RunJob
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.studies import formation_study
 from sumo_avoid.studies.batch import MAX_SEEDS
@@ -46,35 +51,34 @@ PAPER = {
 EXTRA = ("phi_corr", "n_disc", "n_min", "phi_wall", "mu_disc", "mu_cluster", "mu_wall", "mu_coll", "collisions")
 
 
-def _job(job: dict) -> dict:
-    sets = [f"arena.n_agents={job['agents']}", f"sim.duration_s={job['duration']}", *job["sets"]]
-    scn = scenario.load(ROOT / "scenarios" / f"arena_v{job['v']}.toml", sets, seed=job["seed"])
-    t0 = time.perf_counter()
-    res = runner.run(scn)
-    # the flocking metric (min_gap and SUMO bookkeeping left out)
+KIND = f"{__name__}:flocking_record"  # the job kind of a Table 4 run (RunJob.kind)
+
+
+def table4_job(v: int, seed: int, agents: int, duration: float, sets=(), figure: str | None = None) -> RunJob:
+    """The run of scenarios/arena_v{v}.toml with ``agents`` vehicles for ``duration`` s (``sets``: more
+    overrides); ``figure``: draw the arena's trajectories into this PNG."""
+    return RunJob(str(ROOT / "scenarios" / f"arena_v{v}.toml"), seed,
+                  (f"arena.n_agents={agents}", f"sim.duration_s={float(duration)}", *sets), plots=False,
+                  key=f"v{v}_s{seed}", kind=KIND, params={"v": v, "agents": agents, "duration": float(duration),
+                                                          "figure": figure})
+
+
+def flocking_record(res: RunResult, job: RunJob, out_dir: pathlib.Path) -> dict:
+    """Table 4's record of one run, computed in the run's child: the flocking order parameters (min_gap
+    and SUMO bookkeeping left out), the footprint collisions, the rollout's wall time; the figure if asked."""
+    p = job.params
     m = FlockingOrder().compute(res)
     m["collisions"] = int(len(basic.collision_events(res.traj)))
-    m["wall_s"] = time.perf_counter() - t0
-    if job.get("figure"):
-        plot_arena(res, pathlib.Path(job["figure"]), f"v_flock = {job['v']} m/s · seed {job['seed']} · "
-                   f"N = {job['agents']} · {job['duration']:.0f} s · μ = {m['mu']:.3f}")
+    if p["figure"]:
+        plot_arena(res, pathlib.Path(p["figure"]), f"v_flock = {p['v']} m/s · seed {job.seed} · "
+                   f"N = {p['agents']} · {p['duration']:.0f} s · μ = {m['mu']:.3f}")
     keep = {k: m.get(k) for k in (*PAPER, *EXTRA) if k in m}
-    keep.update(v=job["v"], seed=job["seed"], wall_s=m["wall_s"])
+    keep.update(v=p["v"], seed=job.seed, wall_s=res.timings["total_s"])
     return keep
 
 
 class RunFailed(RuntimeError):
     """A run of the study failed (one line: which run, why)."""
-
-
-def _safe_job(job: dict) -> dict:
-    """:func:`_job` in a pool worker, its failure as a plain record: an exception crossing the process
-    boundary may not unpickle in the parent, which would then wait for ever."""
-    try:
-        return _job(job)
-    except Exception as e:
-        msg = str(e).strip().splitlines()[0] if str(e).strip() else ""
-        return {"v": job["v"], "seed": job["seed"], "error": f"{type(e).__name__}: {msg}"[:500]}
 
 
 def check_table4(args) -> None:
@@ -143,36 +147,42 @@ def write_table(rows: list[dict], runs: list[dict], out: pathlib.Path, command: 
     (out / "table4.md").write_text("\n".join(lines) + "\n")
 
 
-def _fresh_processes():
-    """A multiprocessing context whose pool (``maxtasksperchild=1``) runs each job in a fresh process
-    (libsumo: one simulation per process) forked from a server that imported this module once: a
-    spawned interpreter per run paid ~2.7 s of imports each (3 tiny runs: 8 s). "spawn" where there
-    is no fork server (Windows)."""
-    if "forkserver" not in multiprocessing.get_all_start_methods():
-        return multiprocessing.get_context("spawn")
-    ctx = multiprocessing.get_context("forkserver")
-    ctx.set_forkserver_preload([__name__])
-    return ctx
+def _outcomes(job_list: list[RunJob], jobs: int):
+    """(job, outcome) as runs finish, ``jobs`` at a time, each run in its own process (the fork server);
+    on an error or Ctrl-C no new run starts and the running ones are killed."""
+    with tempfile.TemporaryDirectory(prefix="sumo-avoid-table4-") as tmp, \
+            cf.ThreadPoolExecutor(jobs, thread_name_prefix="sumo-avoid-table4") as ex:
+        futs = {}
+        for job in job_list:
+            folder = pathlib.Path(tmp) / job.key
+            folder.mkdir()
+            futs[ex.submit(worker.run_in, folder, job, math.inf)] = job
+        try:
+            for fut in cf.as_completed(futs):
+                yield futs[fut], fut.result()
+        except BaseException:
+            for f in futs:
+                f.cancel()
+            worker.kill_all()
+            raise
 
 
 def reproduce_table4(seeds: int = 20, agents: int = 100, duration: float = 600.0, out=None, jobs: int | None = None,
                      sets=(), first_seed: int = 1) -> list[dict]:
     out = pathlib.Path(out) if out else ROOT / "reports" / "table4"
     (out / "runs").mkdir(parents=True, exist_ok=True)
-    job_list = [{"v": v, "seed": s, "agents": agents, "duration": float(duration), "sets": list(sets),
-                 "figure": str(out / f"fig7_v{v}.png") if s == first_seed else None}
+    job_list = [table4_job(v, s, agents, duration, sets, str(out / f"fig7_v{v}.png") if s == first_seed else None)
                 for v in SPEEDS for s in range(first_seed, first_seed + seeds)]
-    jobs = jobs or min(len(job_list), multiprocessing.cpu_count())
+    jobs = jobs or min(len(job_list), os.cpu_count() or 1)
     runs = []
-    ctx = _fresh_processes()
-    with ctx.Pool(jobs, maxtasksperchild=1) as pool:  # leaving the block terminates the pool, also on error
-        for r in pool.imap_unordered(_safe_job, job_list):
-            if "error" in r:
-                raise RunFailed(f"reproduce table4: the run v_flock {r['v']} seed {r['seed']} failed: {r['error']}")
-            runs.append(r)
-            (out / "runs" / f"v{r['v']}_s{r['seed']}.json").write_text(json.dumps(r, indent=1, sort_keys=True))
-            print(f"  v_flock {r['v']} seed {r['seed']}: mu {r['mu']:.3f} v_vel {r['v_vel']:.2f} "
-                  f"({len(runs)}/{len(job_list)}, {r['wall_s']:.0f} s)", flush=True)
+    for job, res in _outcomes(job_list, jobs):
+        if not res.ok:
+            raise RunFailed(f"reproduce table4: the run v_flock {job.params['v']} seed {job.seed} failed: {res.error}")
+        r = res.metrics
+        runs.append(r)
+        (out / "runs" / f"v{r['v']}_s{r['seed']}.json").write_text(json.dumps(r, indent=1, sort_keys=True))
+        print(f"  v_flock {r['v']} seed {r['seed']}: mu {r['mu']:.3f} v_vel {r['v_vel']:.2f} "
+              f"({len(runs)}/{len(job_list)}, {r['wall_s']:.0f} s)", flush=True)
     runs.sort(key=lambda r: (r["v"], r["seed"]))
     rows = summarise(runs)
     command = "sumo-avoid reproduce table4 " + " ".join(sys.argv[3:]) if len(sys.argv) > 2 else "reproduce_table4()"

@@ -11,6 +11,8 @@ import sqlite3
 import pytest
 from conftest import ROOT, cli_in_process
 
+from sumo_avoid.runs import faults
+
 pytestmark = pytest.mark.sumo
 SCN = ROOT / "scenarios" / "overtaking.toml"
 SEGFAULT_NET = ROOT / "tests" / "data" / "segfault_net.toml"  # a real net that segfaults SUMO 1.28 on load
@@ -34,9 +36,10 @@ def test_run_on_a_net_that_segfaults_sumo_exits_3_in_one_line(tmp_path):
     assert str(SEGFAULT_NET) in line
 
 
-def test_run_segfault_mid_run_exits_3_and_the_log_is_kept(tmp_path):
+def test_run_segfault_mid_run_exits_3_and_the_log_is_kept(tmp_path, monkeypatch):
     out = tmp_path / "out"
-    r = cli_in_process("run", SCN, "--out", out, "--inject-crash", "segfault_mid_run", *SHORT)
+    monkeypatch.setenv(faults.ENV, "segfault_mid_run:*")  # test-only fault injection
+    r = cli_in_process("run", SCN, "--out", out, *SHORT)
     _crashed(r, out)
     assert "Simulation" in (out / "sumo.log").read_text() or (out / "sumo.log").stat().st_size >= 0
 
@@ -47,13 +50,13 @@ def _batch(tmp_path, runs: str):
     return p
 
 
-def _run(scenario, extra=""):
-    return (f'[[runs]]\nscenario = "{scenario}"\nseeds = "1"\n'
-            f'set = ["sim.duration_s=3.0", "output.plots=false"]\n{extra}')
+def _run(scenario, seeds="1"):
+    return f'[[runs]]\nscenario = "{scenario}"\nseeds = "{seeds}"\nset = ["sim.duration_s=3.0", "output.plots=false"]\n'
 
 
-def test_batch_records_a_segfault_mid_run_as_failed(tmp_path):
-    p = _batch(tmp_path, _run(SCN) + _run(SCN, 'inject_crash = "segfault_mid_run"\n'))
+def test_batch_records_a_segfault_mid_run_as_failed(tmp_path, monkeypatch):
+    p = _batch(tmp_path, _run(SCN, "1-2"))
+    monkeypatch.setenv(faults.ENV, "segfault_mid_run:2")  # test-only fault injection: seed 2 crashes
     r = cli_in_process("batch", p, "--quiet", "--workers", "2")
     assert r.returncode == 1, r.stderr
     with sqlite3.connect(tmp_path / "led" / "ledger.sqlite") as con:

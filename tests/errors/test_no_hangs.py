@@ -8,6 +8,7 @@ import time
 import pytest
 
 from sumo_avoid.core.config import ScenarioError, ScenarioErrors
+from sumo_avoid.runs import worker
 from sumo_avoid.studies import batch, reproduce
 from sumo_avoid.sumo.inputs import InputError
 
@@ -22,13 +23,15 @@ def test_errors_survive_pickling_whole(err):
     assert type(back) is type(err) and str(back) == str(err)
 
 
-def test_a_failing_reproduce_job_is_a_plain_record_not_an_exception():
-    """In a pool worker an exception the parent cannot unpickle left `reproduce` waiting for ever."""
-    job = {"v": 4, "seed": 1, "agents": 3, "duration": 1.0, "sets": ["controllers.flocking.nope=1"], "figure": None}
-    rec = reproduce._safe_job(job)
-    assert rec["v"] == 4 and rec["seed"] == 1
-    assert rec["error"].startswith("ScenarioError: ") and "controllers.flocking.nope" in rec["error"]
-    pickle.loads(pickle.dumps(rec))
+@pytest.mark.sumo  # a run's child process (it fails before SUMO starts)
+def test_a_failing_reproduce_run_is_a_plain_outcome_not_an_exception(tmp_path):
+    """A run's failure crosses the process boundary as data (an exception the parent cannot unpickle
+    once left `reproduce` waiting for ever)."""
+    job = reproduce.table4_job(4, 1, agents=3, duration=1.0, sets=["controllers.flocking.nope=1"])
+    res = worker.run_in(tmp_path, job, 120)
+    assert res.status == "failed" and res.metrics is None
+    assert res.error.startswith("ScenarioError: ") and "controllers.flocking.nope" in res.error
+    pickle.loads(pickle.dumps(res))
 
 
 def test_an_unbounded_seed_range_is_refused_at_once():
