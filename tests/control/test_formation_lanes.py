@@ -129,3 +129,18 @@ def test_members_merge_only_where_the_car_behind_can_brake_for_them():
     res = runner.run(scenario.load(LEFT, ["sim.duration_s=25", "sim.seed=6", "output.plots=false"]))
     m = evaluate.run_metrics(res)
     assert m["collisions"] == 0 and m["sumo_collisions"] == 0 and m["min_gap_m"] > 0.5
+
+
+def test_members_drive_with_the_scenarios_apf_parameters():
+    """The members' road field is built with the scenario's [controllers.apf] (Context.params), its
+    defaults only for a context built without a scenario."""
+    from sumo_avoid.control.apf.apf import ApfParams
+    from sumo_avoid.control.formation.formation import FormationParams
+    from sumo_avoid.control.formation.lane_plan import LaneFormation
+    from sumo_avoid.core.interfaces import Context
+
+    mine = ApfParams(k_rep=5.0, gov_decel_mps2=3.0)
+    assert LaneFormation(FormationParams(), Context(1, 0.1, params={"controllers.apf": mine})).driver.p is mine
+    assert LaneFormation(FormationParams(), Context(1, 0.1)).driver.p == ApfParams()
+    scn = scenario.load(ROAD, ["controllers.apf.k_rep=5.0"])
+    assert scn.controller_params["apf"].k_rep == 5.0  # what the runner puts in Context.params
