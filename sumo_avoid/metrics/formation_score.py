@@ -35,8 +35,6 @@ from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.planning import formation_shape as ff
 from sumo_avoid.planning.formation_shape import member_order
-from sumo_avoid.planning import formation_shape as ff
-from sumo_avoid.planning.formation_shape import member_order
 from sumo_avoid.rollout.result import RunResult
 
 NEAR_M = 5.0  # obstacle_min_gap_m looks at obstacles within this of a footprint's circumcircle, m
