@@ -10,7 +10,7 @@ the same road as 16 edges of 250 m, nets/highway_segments.net.xml), all inserted
 back) is an ego. Same route file, seed and SUMO options on both sides:
 
 * ``plain_s``: SUMO alone drives everybody (egos too): libsumo.simulationStep() only.
-* ``plugin_s``: runner.run() with ``ego.sensor = "radar"``, ``ego.safety = "danger_time"`` and the
+* ``plugin_s``: runner.run() with ``ego.sensor = "radar"``, ``ego.layers = ["traffic", "danger_time"]`` and the
   given controller (default ``scripted``: constant speed, so the time is the plug-in's machinery
   (snapshot, radar, tracker, danger-time layer, actuator, moveToXY, recorder) rather than a
   controller's).
@@ -103,7 +103,7 @@ sumo_collisions = {str(sumo_collisions).lower()}
 ids = [{ids}]
 controller = "{controller}"
 sensor = "radar"
-safety = "danger_time"
+layers = ["traffic", "danger_time"]
 cruise_speed_mps = 8.0
 [controllers.scripted]
 speed_mps = 8.0

@@ -8,14 +8,16 @@ the heading (a car slows down for a sharp turn and brakes when the desired veloc
 backwards). With ``max_reverse_speed_mps > 0`` a (nearly) stopped car whose desired direction is
 more than 90 degrees off its heading reverses towards it instead (no dead zone between
 forward and reverse in which a stopped car could do nothing).
-Pure numpy, vectorised over egos; no SUMO here.
+Pure numpy, vectorised over egos; no SUMO here. Parameters: the ``[actuators.kinematic]`` table.
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from sumo_avoid.actuation.held import HeldSpeed
-from sumo_avoid.actuation.params import ActuatorConfig
+from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.geometry import wrap_angle
 from sumo_avoid.core.snapshot import Snapshot
 from sumo_avoid.core.types import Motion, Observation
@@ -23,7 +25,19 @@ from sumo_avoid.core.types import Motion, Observation
 _REVERSE_ANGLE = np.radians(90.0)
 
 
-def actuate(pos, heading, speed, v_des, limits: ActuatorConfig, dt_s: float) -> Motion:
+@dataclass(frozen=True)
+class KinematicParams:
+    max_accel_mps2: float = field_doc(3.0, doc="largest longitudinal acceleration, m/s^2")
+    max_decel_mps2: float = field_doc(8.0, doc="largest braking deceleration, m/s^2")
+    max_lat_accel_mps2: float = field_doc(4.0, doc="largest lateral acceleration v*yaw_rate, m/s^2")
+    max_yaw_rate_radps: float = field_doc(0.8, doc="largest yaw rate, rad/s")
+    min_turn_radius_m: float = field_doc(4.25, doc="smallest turning radius of the vehicle's centre (yaw rate <= v/R), m: "
+                                                  "a compact car with an 11 m kerb-to-kerb turning circle (outer front "
+                                                  "wheel on 5.5 m, 2.65 m wheelbase, 1.55 m track) turns its centre on 4.25 m")
+    max_reverse_speed_mps: float = field_doc(2.0, doc="reverse gear speed limit, m/s (0 = no reversing)")
+
+
+def actuate(pos, heading, speed, v_des, limits: KinematicParams, dt_s: float) -> Motion:
     """One step of the kinematic car for every ego.
 
     pos (E,2) m, heading (E,) rad, speed (E,) signed m/s, v_des (E,2) m/s desired velocity.
@@ -66,11 +80,16 @@ def actuate(pos, heading, speed, v_des, limits: ActuatorConfig, dt_s: float) -> 
 
 
 class KinematicActuator(HeldSpeed):
-    """The kinematic car above (``actuator.mode = "kinematic"``)."""
+    """The kinematic car above (``ego.actuator = "kinematic"``, the default)."""
 
-    def __init__(self, limits: ActuatorConfig, dt_s: float):
+    def __init__(self, params: KinematicParams, ctx):
         super().__init__()
-        self.p, self.dt = limits, dt_s
+        self.p, self.dt = params, ctx.step_s
+
+    @staticmethod
+    def steering(params: KinematicParams) -> tuple[float, float]:
+        """Controllers plan with the car's turning radius and yaw-rate limit."""
+        return params.min_turn_radius_m, params.max_yaw_rate_radps
 
     def held(self, snap: Snapshot) -> Snapshot:
         return snap

@@ -2,19 +2,29 @@
 dv/dt = (v_des - v)/τ with |dv/dt| <= a_max, heading along the velocity, optional outer noise.
 
 The actuator holds each ego's velocity itself (SUMO's reported speed of an off-lane vehicle is
-unreliable) and hands it back through :meth:`RelaxationActuator.held`.
+unreliable) and hands it back through :meth:`RelaxationActuator.held`. Parameters: the
+``[actuators.relaxation]`` table.
 """
 from __future__ import annotations
 
-from dataclasses import replace
+import math
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from sumo_avoid.actuation.held import HeldSpeed
-from sumo_avoid.actuation.params import ActuatorConfig
+from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.noise import velocity_kick
 from sumo_avoid.core.snapshot import Snapshot
 from sumo_avoid.core.types import Motion, Observation
+
+
+@dataclass(frozen=True)
+class RelaxationParams:
+    tau_s: float = field_doc(1.0, positive=True, doc="velocity time constant tau, s")
+    max_accel_mps2: float = field_doc(6.0, doc="acceleration cap: the norm of dv/dt at most this, m/s^2")
+    outer_noise_m2ps3: float = field_doc(0.0, doc="reference simulator's 'outer' noise on the actual motion, sigma "
+                                                  "in m^2/s^3 (robotsim: 0.2; 0 = off; sumo_avoid/core/noise.py)")
 
 
 def relax(vel, v_des, tau_s: float, max_accel_mps2: float, dt_s: float):
@@ -44,12 +54,17 @@ def relaxation_step(pos, vel, heading, v_des, tau_s, max_accel_mps2, dt_s, kick=
 
 
 class RelaxationActuator(HeldSpeed):
-    """Velocity relaxation (``actuator.mode = "relaxation"``); outer noise from its own stream."""
+    """Velocity relaxation (``ego.actuator = "relaxation"``); outer noise from its own stream ``[seed, 7]``."""
 
-    def __init__(self, limits: ActuatorConfig, dt_s: float, rng: np.random.Generator):
+    def __init__(self, params: RelaxationParams, ctx):
         super().__init__()
-        self.p, self.dt, self.rng = limits, dt_s, rng
+        self.p, self.dt, self.rng = params, ctx.step_s, ctx.rng(7)
         self._vel: dict[str, np.ndarray] = {}  # ego id -> 2-D velocity it holds, m/s
+
+    @staticmethod
+    def steering(params: RelaxationParams) -> tuple[float, float]:
+        """No turning radius, no yaw-rate limit: the velocity turns freely."""
+        return 0.0, math.inf
 
     def remove_ego(self, vid: str) -> None:
         super().remove_ego(vid)
@@ -68,7 +83,7 @@ class RelaxationActuator(HeldSpeed):
         snap, rows, p = obs.snapshot, obs.ego_rows, self.p
         kick = velocity_kick(self.rng, p.outer_noise_m2ps3, self.dt, len(rows)) if p.outer_noise_m2ps3 > 0 else None
         pos, vel, head, speed = relaxation_step(snap.pos[rows], snap.vel[rows], snap.heading[rows], command,
-                                                p.tau_s, p.relax_max_accel_mps2, self.dt, kick)
+                                                p.tau_s, p.max_accel_mps2, self.dt, kick)
         self._vel.update(zip(obs.ego_ids, vel))
         self._speed.update(zip(obs.ego_ids, speed.tolist()))
         return Motion(pos, head, speed)

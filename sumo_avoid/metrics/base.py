@@ -33,7 +33,7 @@ class Metric(ABC):
     @classmethod
     def keys_for(cls, scn: Any, stats: Keys) -> Keys:
         """The keys written in a run of scenario ``scn`` whose plug-ins' ``stats()`` write ``stats``
-        (:func:`sumo_avoid.rollout.assemble.metric_keys`); a metric whose keys depend on them overrides this."""
+        (:func:`sumo_avoid.runs.declared.metric_keys`); a metric whose keys depend on them overrides this."""
         return cls.keys
 
     @abstractmethod

@@ -143,7 +143,7 @@ class FormationScore(Metric):
         t_ref = float(np.hypot(*(np.asarray(goals[0]) - first))) / p.leader_speed_mps
         T = arrival_time(times, tr, goals, spec.ego.goal_tolerance_m)
         i_t = (T if T is not None else run.sim_time_s) / t_ref if t_ref > 0 else 0.0
-        i_e = energy_rate(times, tr, spec.actuator.max_accel_mps2)
+        i_e = energy_rate(times, tr, run.scenario.table("actuators.kinematic").max_accel_mps2)
         i_d = distortion(tr, offsets)
         steps = np.asarray(run.stats.get("formation_kappa_steps", [0, 0, 0]), float)
         share = steps / steps.sum() if steps.sum() > 0 else np.zeros(3)

@@ -1,15 +1,16 @@
 """Traffic-rule metrics from the recording (SPEC §5 "Metrics"), whatever the rules layer did (a
-run with ``ego.rules = "none"`` is measured the same way).
+run without ``"traffic"`` in ``ego.layers`` is measured the same way, against the same
+``[layers.traffic]`` parameters).
 
 ``red_light_violations``: the ego's front bumper crosses a stop line (between two recorded steps)
 while its link shows 'r' / 'u' at the earlier step, or 'y' when, at the onset of that yellow, the
 ego could have stopped comfortably (v^2 / (2 b_comf) <= distance to the line, b_comf of the
-scenario's ``[rules]``). Details per crossing in ``signal_crossings`` (ego, tls, link, time, state).
+scenario's ``[layers.traffic]``). Details per crossing in ``signal_crossings`` (ego, tls, link, time, state).
 
 ``yield_violations``: the ego's front bumper crosses the stop line of a link that must give way at
 that moment (:mod:`sumo_avoid.road.yielding`) while a recorded vehicle of a foe link with
 priority arrives at its conflict point within the critical gap t_c of the ego's movement
-(``[rules]`` critical_gap_s / critical_gap_left_s / zipper_headway_s; SUMO's lane positions from the
+(``[layers.traffic]`` critical_gap_s / critical_gap_left_s / zipper_headway_s; SUMO's lane positions from the
 recording).
 Details per crossing of a yielding link in ``yield_crossings`` (ego, junction, time, state, the
 first foe and its arrival time, s).
@@ -18,7 +19,7 @@ At an all-way stop, first come first served: a foe standing at its line that cam
 the ego did is no foe, the others arrive as from a standing start (safety.yielding).
 
 ``stop_sign_violations``: the ego's front crosses the line of a stop sign ('s' / 'w') without
-having stood (slower than ``[rules]`` stop_speed_mps) within stop_margin_m + stop_zone_m before it;
+having stood (slower than ``[layers.traffic]`` stop_speed_mps) within stop_margin_m + stop_zone_m before it;
 ``stop_crossings`` per crossing.
 """
 from __future__ import annotations
@@ -79,7 +80,7 @@ def signal_crossings(run: RunResult) -> list[dict]:
     sig = run.signals
     if sig is None or sig.empty or not run.tasks:
         return []
-    b = run.scenario.spec.rules.comfort_decel_mps2
+    b = run.scenario.table("layers.traffic").comfort_decel_mps2
     out = []
     for vid, task, ego, s in _ego_tracks(run, lambda lk: bool(lk.tls)):
         t, v = ego["time_s"].to_numpy(), ego["speed"].to_numpy()
@@ -101,7 +102,7 @@ def signal_crossings(run: RunResult) -> list[dict]:
 def yield_crossings(run: RunResult) -> list[dict]:
     if not run.tasks or "lane" not in run.traj:
         return []
-    p = run.scenario.spec.rules
+    p = run.scenario.table("layers.traffic")
     traj = run.traj
     out = []
     for vid, task, ego, s in _ego_tracks(run, lambda lk: bool(lk.foes)):
@@ -143,7 +144,7 @@ def stop_crossings(run: RunResult) -> list[dict]:
     (slower than stop_speed_mps) with its front within stop_margin_m + stop_zone_m before the line."""
     if not run.tasks:
         return []
-    p = run.scenario.spec.rules
+    p = run.scenario.table("layers.traffic")
     out = []
     for vid, task, ego, s in _ego_tracks(run, lambda lk: lk.state in STOP_SIGNS or bool(lk.tls)):
         t, v = ego["time_s"].to_numpy(), ego["speed"].to_numpy()

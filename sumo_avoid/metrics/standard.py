@@ -14,6 +14,8 @@ from sumo_avoid.metrics.pairs import Rows
 from sumo_avoid.road.walls import outside_distance as arena_outside_distance
 from sumo_avoid.rollout.result import RunResult
 
+RULES_LAYER = "traffic"  # the rules of the road: metrics.json's "safety" names the layers besides it
+
 
 def ego_outside_distance(run: RunResult) -> np.ndarray:
     """Per ego-step, how far the ego's footprint sticks out of the road's drivable area, m."""
@@ -54,7 +56,9 @@ def outside_distance(run: RunResult) -> np.ndarray:
 
 
 class RunInfo(Metric):
-    """What ran: scenario, controller, sensor, layer, seed, step, simulated time, version."""
+    """What ran: scenario, controller, sensor, the chosen layers besides the rules of the road
+    (``safety``: e.g. "danger_time", several joined by "+", "none" if only "traffic" or no layer),
+    seed, step, simulated time, version."""
 
     keys = Keys(("seed", "step_s", "sim_time_s", "steps"),
                 text=("scenario", "controller", "sensor", "safety", "sumo_avoid_version"))
@@ -62,7 +66,7 @@ class RunInfo(Metric):
     def compute(self, run: RunResult) -> dict:
         spec = run.scenario.spec
         return {"scenario": spec.name, "controller": spec.ego.controller, "sensor": spec.ego.sensor,
-                "safety": spec.ego.safety, "seed": spec.sim.seed, "step_s": spec.sim.step_s,
+                "safety": "+".join(n for n in spec.ego.layers if n != RULES_LAYER) or "none", "seed": spec.sim.seed, "step_s": spec.sim.step_s,
                 "sim_time_s": run.sim_time_s, "steps": run.steps, "sumo_avoid_version": __version__}
 
 

@@ -8,15 +8,13 @@ from __future__ import annotations
 import pathlib
 import tempfile
 import time
-from types import MappingProxyType
 
 from tqdm import tqdm
 
 from sumo_avoid.core.config import FieldError, ScenarioError
-from sumo_avoid.core.interfaces import Context
 from sumo_avoid.road.network import Road
 from sumo_avoid.road.walls import square
-from sumo_avoid.rollout.assemble import assemble, controller_for
+from sumo_avoid.rollout.assemble import assemble, context, controller_for
 from sumo_avoid.rollout.egos import EgoBook
 from sumo_avoid.rollout.loop import rollout
 from sumo_avoid.rollout.recorder import Recorder
@@ -65,10 +63,7 @@ def run(scn, *, log_file=None, progress: bool = False, callbacks=()) -> RunResul
     road = Road.from_net_file(scn.net_file)
     walls = square(arena.origin, arena.size_m) if arena is not None else None
     obstacles = tuple(o.polygon for o in spec.obstacles)
-    car = spec.actuator.mode == "kinematic"  # the steering limits controllers plan with
-    steer = (spec.actuator.min_turn_radius_m, spec.actuator.max_yaw_rate_radps) if car else (0.0, float("inf"))
-    params = MappingProxyType({f"controllers.{name}": p for name, p in scn.controller_params.items()})
-    ctx = Context(spec.sim.seed, spec.sim.step_s, road, walls, obstacles, *steer, params=params)
+    ctx = context(scn, spec.sim.step_s, road, walls, obstacles)  # steering limits and tables: assemble.context
     controller = controller_for(scn, ctx)
     recorder = Recorder(spec.output.record_radius_m)
     hooks = [StaticObstacles(spec.obstacles, obstacles)] + ([ArenaSpawn(arena, walls, obstacles, ctx.rng(1))] if arena else [])
@@ -87,7 +82,7 @@ def run(scn, *, log_file=None, progress: bool = False, callbacks=()) -> RunResul
         except SumoStartError as e:
             raise sumo_load_error(scn, str(e)) from None
         with sim:
-            stack = assemble(scn, Context(spec.sim.seed, sim.step_s, road, walls, obstacles, *steer, params=params), controller)
+            stack = assemble(scn, context(scn, sim.step_s, road, walls, obstacles), controller)
             for hook in hooks:
                 hook.setup(sim)
             try:

@@ -3,7 +3,7 @@
 The seed: the host computer feeds the radar's range and relative speed into a danger-time model;
 as the danger reaches different levels it issues a warning, or limits speed, or brakes; with
 nothing ahead within 100 m the car accelerates back to its cruise speed. The seed gives no numbers,
-so the levels below are ours (scenario ``[safety]`` table), with these defaults and sources:
+so the levels below are ours (scenario ``[layers.danger_time]`` table), with these defaults and sources:
 
     t_d = range / closing speed        (targets in the ego's path, closing speed > 0 only)
 
@@ -56,9 +56,9 @@ class DangerTimeParams:
 
     def __post_init__(self):
         if not self.warning_s >= self.reduce_s >= self.brake_s >= 0:
-            raise ValueError("safety: warning_s >= reduce_s >= brake_s >= 0")
+            raise ValueError("warning_s >= reduce_s >= brake_s >= 0")
         if self.brake_plan_decel_mps2 <= 0 or self.reduce_decel_mps2 <= 0 or self.reaction_s < 0:
-            raise ValueError("safety: decelerations > 0, reaction_s >= 0")
+            raise ValueError("decelerations > 0, reaction_s >= 0")
 
 
 def danger_time(det, ego_width: np.ndarray, margin_m: float):
@@ -97,6 +97,7 @@ class DangerTimeLayer:
     unchanged)."""
 
     needs_scans = True
+    monitor_when_scans = True  # not chosen, it counts all the same when the sensor provides scans
     stats_keys = Keys(("radar_warnings", "radar_reductions", "radar_brakes", "min_danger_time_s"))  # stats()
 
     def __init__(self, params: DangerTimeParams, ctx=None, *, enforce: bool = True):

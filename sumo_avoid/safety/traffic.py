@@ -1,5 +1,6 @@
 """Traffic rules as a layer (SPEC §5): any controller's command is limited so that the ego stops
-for signals and keeps the speed the road ahead allows. ``ego.rules = "none"`` switches it off.
+for signals and keeps the speed the road ahead allows (``"traffic"`` in ``ego.layers``, there by
+default; parameters in ``[layers.traffic]``). An ``ego.layers`` without it switches it off.
 
 Per ego and step, with s the arc length of the ego's front bumper projected on its route path
 (:class:`~sumo_avoid.core.types.EgoTask`: path, junction links, lane speed limits):
@@ -101,6 +102,7 @@ class TrafficRulesLayer:
     """Traffic rules: stop for red and stoppable yellow lights, keep the road's speed ahead."""
 
     needs_scans = False
+    monitor_when_scans = False
     stats_keys = Keys(("rules_signal_stops", "rules_speed_caps", "rules_yields"))  # what stats() writes
 
     def __init__(self, params: RulesParams, ctx=None):

@@ -1,8 +1,9 @@
 """Scenario files: TOML + SUMO XML, validated on load into frozen dataclasses.
 
 A scenario names a SUMO network, SUMO route files (vehicle types, vehicles, flows), which of
-those vehicles the plug-in drives (the egos), their controller and its parameters, the actuator
-limits and the output options. ``docs/scenario_format.md`` lists every key (generated from the
+those vehicles the plug-in drives (the egos), their plug-ins -- controller, sensor, layers,
+actuator -- and their parameters (``[KIND.NAME]`` tables, :mod:`sumo_avoid.scenario.plugins`) and
+the output options. ``docs/scenario_format.md`` lists every key (generated from the
 dataclasses below by ``python -m sumo_avoid.scenario.key_reference``).
 """
 from __future__ import annotations
@@ -14,14 +15,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from sumo_avoid.actuation import ACTUATORS
-from sumo_avoid.actuation.params import ActuatorConfig
-from sumo_avoid.control import CONTROLLERS
 from sumo_avoid.core.config import FieldError, ScenarioError, build, field_doc
 from sumo_avoid.metrics import METRICS
-from sumo_avoid.safety import LAYERS, RULES
-from sumo_avoid.safety.danger_time import DangerTimeParams
-from sumo_avoid.safety.traffic import RulesParams
 from sumo_avoid.scenario.checks import (
     DEFINED,
     SAME_KIND,
@@ -34,8 +29,7 @@ from sumo_avoid.scenario.checks import (
     is_convex,
 )
 from sumo_avoid.scenario.obstacles import RandomObstaclesConfig, draw
-from sumo_avoid.sensing import SENSORS
-from sumo_avoid.sensing.radar import RadarParams
+from sumo_avoid.scenario.plugins import build_tables, check_choices, check_renamed
 
 MIN_STEP_S, MAX_STEP_S = 0.001, 10.0  # SUMO counts time in ms
 MAX_DURATION_S = 86_400.0  # one simulated day: a longer run is a typo, not a study
@@ -78,11 +72,20 @@ class SimConfig:
 class EgoConfig:
     ids: tuple[str, ...] = field_doc((), doc="ids of vehicles in the route files that the plug-in drives "
                                              "(may be empty when an [arena] spawns the egos)")
-    controller: str = field_doc("apf_sa", doc="controller name (see `sumo-avoid controllers`)")
-    sensor: str = field_doc("truth", doc="what controllers see: 'truth' (ground truth) or 'radar' ([radar] table)")
-    safety: str = field_doc("none", doc="safety layer over the controller: 'none' or 'danger_time' ([safety] table)")
-    rules: str = field_doc("traffic", doc="traffic rules layer: 'traffic' (signals, road speed; [rules] table) "
-                                          "or 'none' (a study of rule-free controllers)")
+    controller: str = field_doc("apf_sa", doc="controller name (see `sumo-avoid controllers`; [controllers.NAME] table)")
+    sensor: str = field_doc("truth", doc="what controllers see: 'truth' (ground truth) or 'radar' ([sensors.radar] "
+                                         "table, also the parameters of the radar 'truth' carries for a layer "
+                                         "that needs scans)")
+    layers: tuple[str, ...] = field_doc(("traffic",), doc="layers between controller and actuator, in this order: "
+                                                          "'traffic' (signals, right of way, road speed; "
+                                                          "[layers.traffic]), 'danger_time' (radar danger-time "
+                                                          "braking; [layers.danger_time]); [] = none (a study of "
+                                                          "rule-free controllers). With ego.sensor = 'radar', "
+                                                          "danger_time runs as a monitor (counters only) when "
+                                                          "not listed")
+    actuator: str = field_doc("kinematic", doc="'kinematic' (car: accel/yaw limits; [actuators.kinematic]) or "
+                                               "'relaxation' (flocking reference: dv/dt = (v_des - v)/tau; "
+                                               "[actuators.relaxation])")
     cruise_speed_mps: float = field_doc(20.0, doc="desired cruising speed, m/s")
     goal: tuple[float, ...] | str | None = field_doc(
         None, signed=True, doc="goal of every ego: [x, y] in net coordinates, m, or an edge id (the goal is where "
@@ -94,6 +97,9 @@ class EgoConfig:
     goal_tolerance_m: float = field_doc(5.0, doc="the goal is reached when an ego centre comes this close, m")
 
     def __post_init__(self):
+        dup = _first_duplicate(self.layers)
+        if dup is not None:
+            raise FieldError(f"layers[{dup}]", "layer names listed once (this one is listed before)", self.layers[dup])
         for key, goal in (("goal", self.goal), *((f"goals.{v}", g) for v, g in self.goals.items())):
             if isinstance(goal, tuple) and len(goal) != 2:
                 raise FieldError(key, "[x, y] or an edge id", list(goal))
@@ -164,12 +170,11 @@ class ScenarioSpec:
     sim: SimConfig = field_doc(doc="[sim] table")
     ego: EgoConfig = field_doc(doc="[ego] table")
     description: str = field_doc("", doc="free text")
-    actuator: ActuatorConfig = field_doc(ActuatorConfig(), doc="[actuator] table")
     output: OutputConfig = field_doc(OutputConfig(), doc="[output] table")
     controllers: dict = field_doc(default_factory=dict, doc="[controllers.NAME] tables: parameters of controller NAME")
-    radar: RadarParams = field_doc(RadarParams(), doc="[radar] table (docs/radar.md)")
-    safety: DangerTimeParams = field_doc(DangerTimeParams(), doc="[safety] table: danger-time levels (docs/radar.md)")
-    rules: RulesParams = field_doc(RulesParams(), doc="[rules] table: traffic rules layer (SPEC §5)")
+    sensors: dict = field_doc(default_factory=dict, doc="[sensors.NAME] tables: parameters of sensor NAME")
+    layers: dict = field_doc(default_factory=dict, doc="[layers.NAME] tables: parameters of layer NAME")
+    actuators: dict = field_doc(default_factory=dict, doc="[actuators.NAME] tables: parameters of actuator NAME")
     arena: ArenaConfig | None = field_doc(None, doc="[arena] table: spawn a flock in a square arena (flocking)")
     obstacles: tuple[ObstacleConfig, ...] = field_doc((), doc="[[obstacles]] static convex polygons (id, shape)")
     random_obstacles: RandomObstaclesConfig | None = field_doc(
@@ -196,22 +201,33 @@ def _first_duplicate(ids) -> int | None:
 
 @dataclass(frozen=True)
 class Scenario:
-    """A validated scenario with absolute paths and built controller parameters."""
+    """A validated scenario with absolute paths and the validated parameters of every plug-in."""
 
     spec: ScenarioSpec
     path: pathlib.Path
     net_file: pathlib.Path
     route_files: tuple[pathlib.Path, ...]
     additional_files: tuple[pathlib.Path, ...]
-    controller_params: dict  # name -> frozen params dataclass, for every registered controller
+    tables: dict  # "KIND.NAME" -> frozen params dataclass, for every registered plug-in with parameters
 
     @property
     def name(self) -> str:
         return self.spec.name
 
+    def table(self, name: str):
+        """The validated parameters of table ``name`` ("layers.traffic", "actuators.kinematic", ...),
+        chosen or not (the rule metrics judge by ``[layers.traffic]`` also in runs without the layer)."""
+        return self.tables[name]
+
+    @property
+    def controller_params(self) -> dict:
+        """Controller name -> its parameters, for every registered controller."""
+        return {k.split(".", 1)[1]: v for k, v in self.tables.items() if k.startswith("controllers.")}
+
     @property
     def params(self):
-        return self.controller_params[self.spec.ego.controller]
+        """The chosen controller's parameters."""
+        return self.tables[f"controllers.{self.spec.ego.controller}"]
 
 
 def parse_override(text: str, file: str) -> tuple[list[str], object]:
@@ -271,23 +287,15 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
         data.setdefault("ego", {})["controller"] = controller
     if seed is not None:
         data.setdefault("sim", {})["seed"] = seed
+    check_renamed(data, file)
     spec = build(ScenarioSpec, data, file)
     if spec.random_obstacles is not None:
         spec = _with_random_obstacles(spec, file)
-    for key, value, names in (("ego.controller", spec.ego.controller, CONTROLLERS.names()),
-                              ("ego.sensor", spec.ego.sensor, SENSORS.names()),
-                              ("ego.safety", spec.ego.safety, ["none", *LAYERS.names()]),
-                              ("ego.rules", spec.ego.rules, ["none", *RULES.names()]),
-                              ("actuator.mode", spec.actuator.mode, ACTUATORS.names()),
-                              *((f"output.metrics[{i}]", m, METRICS.names()) for i, m in enumerate(spec.output.metrics))):
-        if value not in names:
-            raise ScenarioError(file, key, f"one of {sorted(names)}", value)
-    params = {}
-    for entry in CONTROLLERS.entries():
-        params[entry.name] = build(entry.params, spec.controllers.get(entry.name, {}), file, f"controllers.{entry.name}")
-    for name in spec.controllers:
-        if name not in CONTROLLERS:
-            raise ScenarioError(file, f"controllers.{name}", f"a controller name, one of {CONTROLLERS.names()}", name)
+    check_choices(spec.ego, file)
+    for i, m in enumerate(spec.output.metrics):
+        if m not in METRICS:
+            raise ScenarioError(file, f"output.metrics[{i}]", f"one of {METRICS.names()}", m)
+    tables = build_tables(spec, file)
 
     base = path.resolve().parent
 
@@ -303,10 +311,11 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     check_sumo_inputs(spec, net, routes, adds, file)
     check_ego_ids(spec, routes + adds, file)
     check_goals(spec, net, file)
-    check_ego_keys(spec, params, file)
+    scn = Scenario(spec, path, net, routes, adds, tables)
+    check_ego_keys(spec, scn.controller_params, file)
     if spec.arena is not None:
         check_arena(spec, file)
-    return Scenario(spec, path, net, routes, adds, params)
+    return scn
 
 
 def _with_random_obstacles(spec: ScenarioSpec, file: str) -> ScenarioSpec:

@@ -1,9 +1,10 @@
 """The sensors a scenario chooses by name (``ego.sensor``): what the controllers and layers see.
+Each is built as ``cls(params, ctx, *, needs_scans, v2v)`` (:class:`sumo_avoid.core.interfaces.Sensor`).
 
 * ``truth``: the controllers read the whole snapshot (``Observation.detections is None``). When a
-  layer needs radar scans (the danger-time layer), a front radar scans all the same and its scans
-  go to the layers only (``Observation.scans``).
-* ``radar``: each ego's front radar (a rear one with ``radar.rear``, side ones with ``radar.side``);
+  layer needs radar scans (the danger-time layer), a front radar with the ``[sensors.radar]``
+  parameters scans all the same and its scans go to the layers only (``Observation.scans``).
+* ``radar`` (``[sensors.radar]``): each ego's front radar (a rear one with ``rear``, side ones with ``side``);
   controllers get the scans plus the tracker's memory of returns out of view (one fused memory for
   all mounts), and the
   traffic's direction at each ego (its route path's nearest segment), along which returns are
@@ -19,13 +20,18 @@ from sumo_avoid.road.polyline import route_directions, route_segments
 from sumo_avoid.core.snapshot import Snapshot
 from sumo_avoid.core.types import EgoTask, Observation
 from sumo_avoid.sensing.log import detections_table
-from sumo_avoid.sensing.radar import Radar
+from sumo_avoid.sensing.radar import Radar, RadarParams
+from sumo_avoid.sensing.v2v import V2VLink, V2VParams
+
+STREAM = {"front": 4, "rear": 5, "left": 8, "right": 9}  # each mount's noise stream (ctx.rng)
 
 
 class _Base:
-    def __init__(self, obstacles=(), v2v=None):
-        self.obstacles = tuple(obstacles)
-        self.v2v = v2v
+    def __init__(self, ctx=None, v2v: V2VParams | None = None):
+        """``ctx`` gives the static obstacles and the random streams; ``v2v`` the controller's V2V
+        parameters (a link on the controller's stream ``ctx.rng()``) or None."""
+        self.obstacles = tuple(ctx.obstacles) if ctx is not None else ()
+        self.v2v = V2VLink(v2v, ctx.rng()) if v2v is not None else None
         self.radars: tuple[Radar, ...] = ()
 
     def add_ego(self, task: EgoTask) -> None:
@@ -48,10 +54,13 @@ class _Base:
 class TruthSensor(_Base):
     """Ground truth for the controllers (a front radar for the layers if they need one)."""
 
-    def __init__(self, radar: Radar | None = None, obstacles=(), v2v=None):
-        super().__init__(obstacles, v2v)
-        self.radar = radar
-        self.radars = (radar,) if radar is not None else ()
+    provides_scans = False  # the controllers get no scans
+
+    def __init__(self, params=None, ctx=None, *, needs_scans: bool = False, v2v: V2VParams | None = None):
+        """No parameters of its own: the layers' radar has the radar sensor's (``ctx.params["sensors.radar"]``)."""
+        super().__init__(ctx, v2v)
+        self.radar = Radar(ctx.params["sensors.radar"], ctx.rng(STREAM["front"])) if needs_scans else None
+        self.radars = (self.radar,) if self.radar is not None else ()
 
     def observe(self, snap: Snapshot, ego_ids, ego_speed) -> Observation:
         scans = (self.radar.scan(snap, ego_ids, self.obstacles),) if self.radar is not None else ()
@@ -60,12 +69,15 @@ class TruthSensor(_Base):
 
 
 class RadarSensor(_Base):
-    """Front radar (+ rear and side radars), tracker memory, route direction per ego."""
+    """Front radar (+ rear with ``rear``, + left and right with ``side``), one tracker memory, route
+    direction per ego."""
 
-    def __init__(self, radars: tuple[Radar, ...], obstacles=(), v2v=None):
-        super().__init__(obstacles, v2v)
-        self.front = radars[0]  # its tracker is the one memory of all mounts
-        self.radars = tuple(radars)
+    provides_scans = True  # scans for the controllers (so the layers' monitors run)
+
+    def __init__(self, params: RadarParams, ctx, *, needs_scans: bool = True, v2v: V2VParams | None = None):
+        super().__init__(ctx, v2v)
+        self.radars = tuple(Radar(params, ctx.rng(STREAM[m]), mount=m) for m in params.mounts())
+        self.front = self.radars[0]  # its tracker is the one memory of all mounts
         self._paths: dict[str, np.ndarray] = {}
         self._seg_key, self._segs = None, None  # route_segments() of the egos in _seg_key
 

@@ -9,7 +9,7 @@ A suite file has ``[[entry]]`` tables: ``name``, ``scenario`` (path relative to 
     METRIC_mean|_min|_max OP VALUE   # aggregate over seeds: min_gap_m_min >= 0.5
 
 OP is one of ``== != <= >= < >``; VALUE a number or ``true``/``false``. METRIC must be a key with
-one value per run that a run of the entry writes (:func:`sumo_avoid.rollout.assemble.metric_keys`,
+one value per run that a run of the entry writes (:func:`sumo_avoid.runs.declared.metric_keys`,
 from the metrics' and plug-ins' declarations), checked before any run starts; a metric without a
 value (n/a) and a failed run fail the entry. ``[defaults]`` may give ``seeds`` and ``set`` for
 every entry.
@@ -27,7 +27,7 @@ import xml.etree.ElementTree as ET
 
 from sumo_avoid.core.config import ScenarioError, ScenarioErrors, build
 from sumo_avoid.core.types import Keys
-from sumo_avoid.rollout.assemble import metric_keys
+from sumo_avoid.runs.declared import metric_keys
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.spec import read_toml
 from sumo_avoid.studies import batch, ledger

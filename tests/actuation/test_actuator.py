@@ -4,11 +4,10 @@ import math
 import numpy as np
 import pytest
 
-from sumo_avoid.actuation.kinematic import actuate, wrap_angle
-from sumo_avoid.scenario.spec import ActuatorConfig
+from sumo_avoid.actuation.kinematic import KinematicParams, actuate, wrap_angle
 
-LIM = ActuatorConfig(max_accel_mps2=2.0, max_decel_mps2=5.0, max_lat_accel_mps2=4.0, max_yaw_rate_radps=0.5,
-                     min_turn_radius_m=5.0, max_reverse_speed_mps=2.0)
+LIM = KinematicParams(max_accel_mps2=2.0, max_decel_mps2=5.0, max_lat_accel_mps2=4.0, max_yaw_rate_radps=0.5,
+                      min_turn_radius_m=5.0, max_reverse_speed_mps=2.0)
 
 
 def test_acceleration_and_braking_are_capped():
@@ -32,7 +31,7 @@ def test_yaw_rate_limited_by_lateral_acceleration():
 
 def test_no_turning_on_the_spot():
     # stopped, desired velocity 90 deg to the left: forward target 5 cos 90deg = 0, yaw <= v/R = 0
-    m = actuate([[0, 0]], [0.0], [0.0], [[0.0, 5.0]], ActuatorConfig(max_reverse_speed_mps=0.0), 0.1)
+    m = actuate([[0, 0]], [0.0], [0.0], [[0.0, 5.0]], KinematicParams(max_reverse_speed_mps=0.0), 0.1)
     assert m.heading[0] == 0.0 and m.speed[0] == pytest.approx(0.0, abs=1e-12)
 
 
@@ -57,3 +56,12 @@ def test_wrap_angle():
 def test_vectorised_over_egos():
     m = actuate(np.zeros((3, 2)), np.zeros(3), np.full(3, 5.0), [[5, 0], [10, 0], [0, 0]], LIM, 0.1)
     assert m.speed == pytest.approx([5.0, 5.2, 4.5])
+
+
+def test_each_actuator_declares_the_steering_limits_controllers_plan_with():
+    """The kinematic car plans with its turning radius and yaw-rate limit; relaxation with none."""
+    from sumo_avoid.actuation import ACTUATORS
+    from sumo_avoid.actuation.relaxation import RelaxationParams
+
+    assert ACTUATORS["kinematic"].factory.steering(LIM) == (5.0, 0.5)
+    assert ACTUATORS["relaxation"].factory.steering(RelaxationParams()) == (0.0, math.inf)

@@ -74,7 +74,7 @@ def curved_road(tmp_path_factory):
     (d / "flock.toml").write_text(
         'name = "curve_flock"\n[sim]\nnet = "curve.net.xml"\nroutes = ["flock.rou.xml"]\nstep_s = 0.1\n'
         'duration_s = 18.0\nseed = 1\n[ego]\nids = ["f0", "f1", "f2", "f3"]\ncontroller = "flocking"\n'
-        '[actuator]\nmode = "kinematic"\nmax_accel_mps2 = 3.0\nmax_decel_mps2 = 8.0\nmax_lat_accel_mps2 = 4.0\n'
+        '[actuators.kinematic]\nmax_accel_mps2 = 3.0\nmax_decel_mps2 = 8.0\nmax_lat_accel_mps2 = 4.0\n'
         'max_yaw_rate_radps = 0.8\nmin_turn_radius_m = 5.5\nmax_reverse_speed_mps = 0.0\n'
         '[controllers.flocking]\npreset = "paper_v8"\nv_flock_mps = 14.0\nv_max_mps = 20.0\nspeed_rule = "cutoff"\n'
         'shill_normal_only = true\n')

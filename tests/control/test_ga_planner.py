@@ -62,7 +62,7 @@ def test_field_plan_log_and_metrics(field_run, tmp_path):
 def test_without_radar_range_the_planner_knows_nothing():
     """The planner sees only radar returns: with a 1 m radar every plan runs straight through the
     first obstacle, and only the danger-time layer (same radar, standstill gap) stops the car."""
-    res, m = run_scenario("planner/field", seed=1, overrides=["radar.max_range_m=1.0", "sim.duration_s=12"])
+    res, m = run_scenario("planner/field", seed=1, overrides=["sensors.radar.max_range_m=1.0", "sim.duration_s=12"])
     paths = [parse_path(p) for p in res.tables["plans"]["path"]]
     assert paths and all(crosses(p, res.scene.obstacles) for p in paths)
     assert m["goal_reached"] is False and m["radar_brakes"] >= 1

@@ -31,7 +31,7 @@ def lane_change(tmp_path_factory):
 
 
 @pytest.mark.sumo
-@pytest.mark.parametrize("sensor", [[], ['ego.sensor="radar"', "radar.rear=true"], ['ego.sensor="radar"', "radar.side=true"]],
+@pytest.mark.parametrize("sensor", [[], ['ego.sensor="radar"', "sensors.radar.rear=true"], ['ego.sensor="radar"', "sensors.radar.side=true"]],
                          ids=["truth", "rear_radar", "side_radar"])
 def test_the_ego_lets_the_faster_car_pass_and_changes_lanes_behind_it(lane_change, sensor):
     res = runner.run(scenario.load(lane_change / "l.toml", sensor))

@@ -11,12 +11,12 @@ from conftest import run_scenario
 from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics import METRICS, STANDARD
 from sumo_avoid.metrics.base import Metric
-from sumo_avoid.rollout.assemble import metric_keys
+from sumo_avoid.runs.declared import metric_keys
 from sumo_avoid.studies import report
 
 RUNS = {  # scenario, overrides, controller: every controller, layer and extra metric at least once
     "apf_sa+rules+flocking_metric": ("overtaking", ["sim.duration_s=3", 'output.metrics=["flocking"]'], None),
-    "apf+radar_monitor": ("overtaking", ["sim.duration_s=2", 'ego.rules="none"', 'ego.sensor="radar"'], "apf"),
+    "apf+radar_monitor": ("overtaking", ["sim.duration_s=2", 'ego.layers=[]', 'ego.sensor="radar"'], "apf"),
     "scripted+danger_time": ("radar_brake", ["sim.duration_s=3"], None),
     "flocking_arena": ("arena_v4", ["sim.duration_s=2", "arena.n_agents=8"], None),
     "formation": ("formation/gap", ["sim.duration_s=2"], None),

@@ -121,7 +121,7 @@ def roundabout(tmp_path_factory):
 def _scenario(d, rules):
     f = d / f"rb_{rules}.toml"
     f.write_text('name = "rb"\n[sim]\nnet = "rb.net.xml"\nroutes = ["rb.rou.xml"]\nstep_s = 0.1\nduration_s = 45.0\n'
-                 f'seed = 1\n[ego]\nids = ["ego"]\ncontroller = "apf_sa"\ncruise_speed_mps = 10.0\nrules = "{rules}"\n')
+                 f'seed = 1\n[ego]\nids = ["ego"]\ncontroller = "apf_sa"\ncruise_speed_mps = 10.0\nlayers = {[] if rules == "none" else [rules]}\n')
     return scenario.load(f)
 
 

@@ -35,7 +35,7 @@ def small_v4():
 def test_without_noise_the_rescale_rule_caps_speed_at_v_flock():
     """Physics invariant: with the noise off, |v_des| = v_flock and relaxation towards it never
     overshoots, so no recorded speed exceeds v_flock = 4 m/s."""
-    res, _ = _run("arena_v4.toml", "arena.n_agents=12", "sim.duration_s=30", "actuator.outer_noise_m2ps3=0",
+    res, _ = _run("arena_v4.toml", "arena.n_agents=12", "sim.duration_s=30", "actuators.relaxation.outer_noise_m2ps3=0",
                   "controllers.flocking.gps_sigma_m2ps2=0")
     ego = res.traj[res.traj["is_ego"]]
     assert ego["speed"].max() <= 4.0 + 1e-9
@@ -94,8 +94,8 @@ def test_obstacles_are_avoided_and_passed_to_the_run():
 
 
 def test_arena_keys_validated(tmp_path):
-    with pytest.raises(ScenarioError, match="actuator"):
-        scenario.load(SCN / "arena_v4.toml", ["actuator.mode=teleport"])
+    with pytest.raises(ScenarioError, match="ego.actuator"):
+        scenario.load(SCN / "arena_v4.toml", ['ego.actuator="teleport"'])
     with pytest.raises(ScenarioError, match="preset"):
         scenario.load(SCN / "arena_v4.toml", ["controllers.flocking.preset=paper_v5"])
     with pytest.raises(ScenarioError, match="arena"):

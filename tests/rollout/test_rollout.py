@@ -1,24 +1,27 @@
-"""The rollout loop: with a fake simulator (no libsumo) for its bookkeeping, and a toy controller and
-toy layer registered from this test module (no change to the package) driven on real SUMO."""
+"""The rollout loop: with a fake simulator (no libsumo) for its bookkeeping, and a toy controller, a
+toy layer with its own ``[layers.NAME]`` table and a toy sensor with its own ``[sensors.NAME]`` table,
+registered from this test module (no change to the package), driven on real SUMO."""
 from __future__ import annotations
 
 import math
+import pathlib
 from dataclasses import dataclass
 
 import numpy as np
 import pytest
 
-from sumo_avoid.actuation.kinematic import KinematicActuator
-from sumo_avoid.actuation.params import ActuatorConfig
+from sumo_avoid.actuation.kinematic import KinematicActuator, KinematicParams
 from sumo_avoid.control import CONTROLLERS
 from sumo_avoid.core.config import field_doc
+from sumo_avoid.core.interfaces import Context
 from sumo_avoid.core.snapshot import Snapshot
-from sumo_avoid.core.types import Keys, Needs
+from sumo_avoid.core.types import Keys, Needs, Observation
 from sumo_avoid.rollout.assemble import Stack
 from sumo_avoid.rollout.egos import EgoBook
 from sumo_avoid.rollout.loop import rollout
 from sumo_avoid.rollout.recorder import Recorder
 from sumo_avoid.safety import LAYERS
+from sumo_avoid.sensing import SENSORS
 from sumo_avoid.sensing.sensors import TruthSensor
 from tests.conftest import SCENARIOS
 
@@ -59,13 +62,20 @@ class ToyController:
         return np.array([self.p.speed_mps * self.dirs[v] for v in obs.ego_ids]).reshape(-1, 2)
 
 
-class HalfSpeedLayer:
-    """Halves every command (and counts)."""
+@dataclass(frozen=True)
+class ScaleParams:
+    factor: float = field_doc(1.0, doc="every command is multiplied by this")
+
+
+class ScaleLayer:
+    """Scales every command by its table's ``factor`` (and counts)."""
 
     needs_scans = False
-    stats_keys = Keys(("half_calls",))
+    monitor_when_scans = False
+    stats_keys = Keys(("scale_calls",))
 
-    def __init__(self, params=None, ctx=None, *, enforce=True):
+    def __init__(self, params: ScaleParams = ScaleParams(0.5), ctx=None, *, enforce=True):
+        self.p = params
         self.calls = 0
 
     def add_ego(self, task):
@@ -75,11 +85,50 @@ class HalfSpeedLayer:
         pass
 
     def stats(self):
-        return {"half_calls": self.calls}
+        return {"scale_calls": self.calls}
 
     def filter(self, obs, command):
         self.calls += 1
-        return 0.5 * command
+        return self.p.factor * command
+
+
+@dataclass(frozen=True)
+class GapLogParams:
+    every_steps: int = field_doc(1, positive=True, doc="log each ego's nearest other vehicle every this many steps")
+
+
+class GapLogSensor:
+    """Ground truth for the controller; logs each ego's distance to the nearest other vehicle's centre
+    every ``every_steps`` steps (its table ``gap_log``)."""
+
+    provides_scans = False
+
+    def __init__(self, params: GapLogParams, ctx, *, needs_scans=False, v2v=None):
+        self.p, self.steps, self.rows = params, 0, []
+
+    def add_ego(self, task):
+        pass
+
+    def remove_ego(self, vid):
+        pass
+
+    def stats(self):
+        return {}
+
+    def tables(self):
+        import pandas as pd
+
+        return {"gap_log": pd.DataFrame(self.rows, columns=["time_s", "ego", "nearest_m"])}
+
+    def observe(self, snap, ego_ids, ego_speed):
+        rows = np.array([snap.index[v] for v in ego_ids], dtype=int)
+        if self.steps % self.p.every_steps == 0:
+            for vid, r in zip(ego_ids, rows):
+                d = np.hypot(*(snap.pos - snap.pos[r]).T)
+                d[r] = np.inf
+                self.rows.append((snap.time_s, vid, float(d.min())))
+        self.steps += 1
+        return Observation(snap, tuple(ego_ids), rows, ego_speed)
 
 
 # ---------------------------------------------------------------- fake simulator
@@ -133,8 +182,8 @@ class StraightRoad:
 def test_loop_takes_over_drives_and_retires_at_the_goal_with_a_fake_simulator():
     sim = FakeSim()
     ctl = ToyController(ToyParams(speed_mps=10.0))
-    layer = HalfSpeedLayer()
-    stack = Stack(TruthSensor(), ctl, (layer,), KinematicActuator(ActuatorConfig(max_accel_mps2=100.0), sim.dt))
+    layer = ScaleLayer()
+    stack = Stack(TruthSensor(), ctl, (layer,), KinematicActuator(KinematicParams(max_accel_mps2=100.0), Context(1, sim.dt)))
     egos = EgoBook({"e"}, StraightRoad(), goal_tolerance_m=5.0, cruise_speed_mps=10.0)
     rec = Recorder()
     last = rollout(sim, stack, egos, rec, n_steps=1000)
@@ -152,7 +201,7 @@ def test_loop_takes_over_drives_and_retires_at_the_goal_with_a_fake_simulator():
 
 def test_loop_stops_at_n_steps_without_egos():
     sim = FakeSim()
-    stack = Stack(TruthSensor(), ToyController(ToyParams()), (), KinematicActuator(ActuatorConfig(), sim.dt))
+    stack = Stack(TruthSensor(), ToyController(ToyParams()), (), KinematicActuator(KinematicParams(), Context(1, sim.dt)))
     egos = EgoBook({"nobody"}, StraightRoad(), goal_tolerance_m=5.0, cruise_speed_mps=10.0)
     assert rollout(sim, stack, egos, Recorder(), n_steps=7) == 7
 
@@ -161,33 +210,73 @@ def test_loop_stops_at_n_steps_without_egos():
 @pytest.fixture
 def toy_registered():
     CONTROLLERS.register("toy", ToyController, ToyParams)
-    LAYERS.register("half_speed", HalfSpeedLayer)
+    LAYERS.register("scale", ScaleLayer, ScaleParams)
+    SENSORS.register("gap_log", GapLogSensor, GapLogParams)
     yield
     CONTROLLERS.unregister("toy")
-    LAYERS.unregister("half_speed")
+    LAYERS.unregister("scale")
+    SENSORS.unregister("gap_log")
+
+
+def toy_scenario(tmp_path, tables: str) -> pathlib.Path:
+    """overtaking.toml (paths made absolute) with the toy sensor and the toy layer after the rules
+    layer in [ego], and ``tables`` appended."""
+    text = (SCENARIOS / "overtaking.toml").read_text()
+    text = text.replace('"../nets/overtaking.net.xml"', f'"{(SCENARIOS.parent / "nets" / "overtaking.net.xml").as_posix()}"')
+    text = text.replace('"overtaking.rou.xml"', f'"{(SCENARIOS / "overtaking.rou.xml").as_posix()}"')
+    text = text.replace("[ego]\n", '[ego]\nsensor = "gap_log"\nlayers = ["traffic", "scale"]\n', 1)
+    path = tmp_path / "toy.toml"
+    path.write_text(text + "\n" + tables)
+    return path
+
+
+TOY_TABLES = "[layers.scale]\nfactor = 0.5\n\n[sensors.gap_log]\nevery_steps = 10\n\n[controllers.toy]\nspeed_mps = 12.0\n"
 
 
 @pytest.mark.sumo
-def test_a_toy_controller_and_layer_from_a_test_module_run_on_real_sumo(toy_registered):
-    from sumo_avoid.runs.outputs import run_metrics
+def test_a_toy_controller_layer_and_sensor_from_a_test_module_run_on_real_sumo(toy_registered, tmp_path):
+    """Registered from here with their parameter tables, chosen and parameterised in the scenario
+    file like the package's own: the toy layer scales by its [layers.scale] factor after the rules
+    layer, the toy sensor logs at its [sensors.gap_log] period, their tables reach Context.params."""
     from sumo_avoid.runs import runner
-    from sumo_avoid.rollout.assemble import metric_keys
+    from sumo_avoid.runs.declared import metric_keys
+    from sumo_avoid.runs.outputs import run_metrics
     from sumo_avoid.scenario import spec as scenario
 
-    scn = scenario.load(SCENARIOS / "overtaking.toml", ["sim.duration_s=20", "ego.safety=\"half_speed\"",
-                                                        "controllers.toy.speed_mps=12.0"], controller="toy")
+    scn = scenario.load(toy_scenario(tmp_path, TOY_TABLES), ["sim.duration_s=20"], controller="toy")
+    assert scn.table("layers.scale") == ScaleParams(0.5) and scn.table("sensors.gap_log") == GapLogParams(10)
     res = runner.run(scn)
     m = run_metrics(res)
     ego = res.traj[res.traj["is_ego"]]
-    assert m["controller"] == "toy" and m["toy_steps"] == m["half_calls"] > 150
+    assert (m["controller"], m["sensor"], m["safety"]) == ("toy", "gap_log", "scale")
+    assert m["toy_steps"] == m["scale_calls"] > 150 and "rules_signal_stops" in m  # the rules layer ran too
     assert set(m) == metric_keys(scn).names  # the user's plug-ins declare their counters like the package's
-    # the layer halves 12 m/s: the ego settles at 6 m/s along the road
+    assert not any(k.startswith("radar_") for k in m)  # no scans: no danger-time monitor
+    # the sensor's table: one row every 10 steps the ego was driven
+    log = res.tables["gap_log"]
+    assert len(log) == math.ceil(m["toy_steps"] / 10) and (log["ego"] == "ego").all() and (log["nearest_m"] > 0).all()
+    # the layer scales 12 m/s by 0.5: the ego settles at 6 m/s along the road
     assert ego["speed"].iloc[-20:].mean() == pytest.approx(6.0, abs=0.05)
     assert math.isclose(m["collisions"], 0)
 
 
+@pytest.mark.parametrize("tables, key", [
+    ("[layers.scale]\nfactor = \"half\"\n", "layers.scale.factor"),
+    ("[layers.scale]\nfactr = 0.5\n", "layers.scale.factr"),
+    ("[sensors.gap_log]\nevery_steps = 0\n", "sensors.gap_log.every_steps"),
+    ("[sensors.gap_logger]\nevery_steps = 2\n", "sensors.gap_logger"),
+])
+def test_the_toy_plug_ins_tables_are_validated_like_the_package_s(toy_registered, tmp_path, tables, key):
+    from sumo_avoid.core.config import ScenarioError
+    from sumo_avoid.scenario import spec as scenario
+
+    path = toy_scenario(tmp_path, tables)
+    with pytest.raises(ScenarioError) as err:
+        scenario.load(path, controller="toy")
+    assert str(err.value).startswith(f"{path}: key '{key}': expected ")
+
+
 def test_the_example_controller_in_the_docs_runs_through_the_loop():
-    import pathlib
     import re
 
     doc = (pathlib.Path(__file__).resolve().parents[2] / "docs" / "writing_a_controller.md").read_text()
@@ -196,7 +285,7 @@ def test_the_example_controller_in_the_docs_runs_through_the_loop():
     exec(compile(code, "writing_a_controller.md", "exec"), ns)
     ctl = ns["StraightController"](ns["StraightParams"](speed_mps=10.0))
     sim = FakeSim()
-    stack = Stack(TruthSensor(), ctl, (), KinematicActuator(ActuatorConfig(max_accel_mps2=100.0), sim.dt))
+    stack = Stack(TruthSensor(), ctl, (), KinematicActuator(KinematicParams(max_accel_mps2=100.0), Context(1, sim.dt)))
     egos = EgoBook({"e"}, StraightRoad(), goal_tolerance_m=5.0, cruise_speed_mps=10.0)
     rollout(sim, stack, egos, Recorder(), n_steps=1000)
     assert egos.finished == {"e"} and ctl.tasks == {} and ctl.stats() == {} and ctl.tables() == {}
@@ -211,7 +300,7 @@ def test_output_metrics_adds_to_the_standard_set():
     car controller (with [controllers.flocking]'s v_flock and r_c)."""
     from sumo_avoid.runs.outputs import run_metrics
     from sumo_avoid.runs import runner
-    from sumo_avoid.rollout.assemble import metric_names
+    from sumo_avoid.runs.declared import metric_names
     from sumo_avoid.scenario import spec as scenario
 
     scn = scenario.load(SCENARIOS / "crash_straight.toml", ['output.metrics=["run", "flocking"]'])

@@ -47,7 +47,7 @@ def _scenario(d: pathlib.Path, phases, rules="traffic", duration=45.0):
     f = d / f"s_{rules}.toml"
     f.write_text(f'name = "tl"\n[sim]\nnet = "grid.net.xml"\nroutes = ["ego.rou.xml"]\nadditional = ["prog.add.xml"]\n'
                  f'step_s = 0.1\nduration_s = {duration}\nseed = 1\n'
-                 f'[ego]\nids = ["ego"]\ncontroller = "scripted"\ncruise_speed_mps = 12.0\nrules = "{rules}"\n'
+                 f'[ego]\nids = ["ego"]\ncontroller = "scripted"\ncruise_speed_mps = 12.0\nlayers = {[] if rules == "none" else [rules]}\n'
                  f'[controllers.scripted]\nspeed_mps = 12.0\n')
     return scenario.load(f)
 
@@ -114,7 +114,7 @@ def _stop_run(d, rules):
     f = d / f"s_{rules}.toml"
     f.write_text(f'name = "stop"\n[sim]\nnet = "grid.net.xml"\nroutes = ["ego.rou.xml"]\nstep_s = 0.1\n'
                  f'duration_s = 30.0\nseed = 1\n[ego]\nids = ["ego"]\ncontroller = "scripted"\n'
-                 f'cruise_speed_mps = 12.0\nrules = "{rules}"\n[controllers.scripted]\nspeed_mps = 12.0\n')
+                 f'cruise_speed_mps = 12.0\nlayers = {[] if rules == "none" else [rules]}\n[controllers.scripted]\nspeed_mps = 12.0\n')
     res = runner.run(scenario.load(f))
     return res, outputs.run_metrics(res)
 

@@ -90,10 +90,11 @@ def test_params_validation():
 
 def test_scenario_keys(tmp_path):
     src = (scenario.pathlib.Path(__file__).resolve().parents[2] / "scenarios" / "radar_brake.toml")
-    scn = scenario.load(src, ["radar.max_range_m=80", "safety.warning_s=4.0"])
-    assert scn.spec.ego.sensor == "radar" and scn.spec.ego.safety == "danger_time"
-    assert scn.spec.radar.max_range_m == 80.0 and scn.spec.safety.warning_s == 4.0
-    for bad in ('ego.sensor="lidar"', 'ego.safety="aeb"', "radar.fov_deg=270", "safety.brake_s=9",
-                "radar.colour=1"):
+    scn = scenario.load(src, ["sensors.radar.max_range_m=80", "layers.danger_time.warning_s=4.0"])
+    assert scn.spec.ego.sensor == "radar" and scn.spec.ego.layers == ("traffic", "danger_time")
+    assert scn.table("sensors.radar").max_range_m == 80.0 and scn.table("layers.danger_time").warning_s == 4.0
+    for bad in ('ego.sensor="lidar"', 'ego.layers=["traffic", "aeb"]', "sensors.radar.fov_deg=270",
+                "layers.danger_time.brake_s=9", "sensors.radar.colour=1", 'ego.layers="danger_time"',
+                'ego.layers=["traffic", "traffic"]', "sensors.lidar.range_m=3", "sensors.truth.x=1"):
         with pytest.raises(ScenarioError):
             scenario.load(src, [bad])

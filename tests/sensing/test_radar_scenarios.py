@@ -22,7 +22,7 @@ def radar_brake(tmp_path, speed_mps: float, safety: str):
     rou = tmp_path / f"radar_brake_{speed_mps}.rou.xml"
     rou.write_text(xml)
     scn = scenario.load(SCN / "radar_brake.toml", [f"sim.routes=['{rou}']", f"controllers.scripted.speed_mps={speed_mps}",
-                                                   f'ego.safety="{safety}"', "sim.duration_s=28"])
+                                                   f"ego.layers={['traffic'] + ([safety] if safety != 'none' else [])}", "sim.duration_s=28"])
     return evaluate.run_metrics(runner.run(scn))
 
 
@@ -65,8 +65,8 @@ def test_overtaking_on_radar_reaches_goal(seed):
 def test_overtaking_with_a_rear_radar_too():
     """The optional rear radar (one fused tracker memory) on the seed that pulled out in front of
     car2: no contact, and the run logs returns of both mounts."""
-    scn = scenario.load(SCN / "overtaking.toml", ['ego.sensor="radar"', "radar.rear=true",
-                                                   "radar.log_detections=true"], seed=1)
+    scn = scenario.load(SCN / "overtaking.toml", ['ego.sensor="radar"', "sensors.radar.rear=true",
+                                                   "sensors.radar.log_detections=true"], seed=1)
     res = runner.run(scn)
     m = evaluate.run_metrics(res)
     assert m["goal_reached"] and m["collisions"] == 0

@@ -125,7 +125,7 @@ def _closing(tmp_path, duration_s: float, ego: str = "ego"):
         ids = ["{ego}"]
         controller = "scripted"
         goal = [1400.0, -8.75]
-        rules = "none"
+        layers = []
         [controllers.scripted]
         speed_mps = 15.0
         """))

@@ -158,6 +158,7 @@ class FormationController(BaseController):
 
     needs = Needs(goals=True, v2v=True)
     metrics = ("formation",)  # S_ef and its terms, kappa shares (sumo_avoid.metrics.formation_score)
+    plots = ("formation",)  # formation.png: paths and kappa over time (sumo_avoid.plots.PLOTS)
     stats_keys = Keys(("formation_min_gamma",), nested=("formation_kappa_steps", "formation_mode_log"))  # stats()
 
     def __init__(self, params: FormationParams, ctx):

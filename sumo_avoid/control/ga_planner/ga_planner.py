@@ -172,6 +172,7 @@ class _Ego:
 
 
 class GaPlannerController(BaseController):
+    plots = ("plans",)  # plans.png and convergence.png from its plan log (sumo_avoid.plots.PLOTS)
     stats_keys = Keys(("plans", "replans", "generations_to_usable", "generations_to_usable_max",  # stats()
                        "plans_usable_within_20", "plans_never_usable", "planner_reversals"))
 
