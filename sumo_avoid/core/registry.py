@@ -2,6 +2,9 @@
 
 A new controller (sensor, layer, actuator, metric) is one file plus one ``register`` line in its
 package's ``__init__``; a test (or a user's script) may register its own before loading a scenario.
+A scenario chooses a plug-in by name and gives its parameters in the table ``[KIND.NAME]``
+(``[controllers.apf]``, ``[sensors.radar]``, ``[layers.traffic]``, ``[actuators.kinematic]``),
+validated against the registered dataclass (:mod:`sumo_avoid.scenario.plugins`).
 """
 from __future__ import annotations
 
