@@ -72,19 +72,3 @@ def test_plots_come_from_the_scene_and_the_controller_s_declaration():
     assert plot_names(scenario.load(SCENARIOS / "arena_obstacles.toml")) == ("trajectory", "timeseries", "arena")
     assert plot_names(scenario.load(SCENARIOS / "planner" / "field.toml"))[-1] == "plans"
     assert plot_names(scenario.load(SCENARIOS / "formation" / "gap.toml"))[-1] == "formation"
-
-
-@pytest.mark.parametrize("override, key, new", [
-    ("radar.rear=true", "radar", "[sensors.radar]"),
-    ("safety.warning_s=4.0", "safety", "[layers.danger_time]"),
-    ("rules.stop_margin_m=2.0", "rules", "[layers.traffic]"),
-    ('actuator.mode="relaxation"', "actuator.mode", "ego.actuator"),
-    ("actuator.max_accel_mps2=2.0", "actuator", "[actuators.kinematic]"),
-    ('ego.rules="none"', "ego.rules", "ego.layers"),
-    ('ego.safety="danger_time"', "ego.safety", "ego.layers"),
-])
-def test_a_key_of_the_earlier_layout_names_the_new_one(override, key, new):
-    with pytest.raises(scenario.ScenarioError) as err:
-        scenario.load(OVERTAKING, [override])
-    assert str(err.value).startswith(f"{OVERTAKING}: key '{key}' was renamed: use {new}")
-    assert "\n" not in str(err.value)
