@@ -9,7 +9,7 @@ import pytest
 
 from sumo_avoid.core.config import ScenarioError, ScenarioErrors
 from sumo_avoid.runs import worker
-from sumo_avoid.studies import batch, reproduce
+from sumo_avoid.studies import batch, table4
 from sumo_avoid.sumo.inputs import InputError
 
 
@@ -27,7 +27,7 @@ def test_errors_survive_pickling_whole(err):
 def test_a_failing_reproduce_run_is_a_plain_outcome_not_an_exception(tmp_path):
     """A run's failure crosses the process boundary as data (an exception the parent cannot unpickle
     once left `reproduce` waiting for ever)."""
-    job = reproduce.table4_job(4, 1, agents=3, duration=1.0, sets=["controllers.flocking.nope=1"])
+    job = table4.table4_job(4, 1, agents=3, duration=1.0, sets=["controllers.flocking.nope=1"])
     res = worker.run_in(tmp_path, job, 120)
     assert res.status == "failed" and res.metrics is None
     assert res.error.startswith("ScenarioError: ") and "controllers.flocking.nope" in res.error
