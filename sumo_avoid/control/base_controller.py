@@ -12,7 +12,7 @@ from sumo_avoid.sensing.v2v import V2VParams
 
 class BaseController:
     """A controller of :class:`sumo_avoid.core.interfaces.Controller` with the defaults: egos are
-    retired at their goal (``needs``), no metrics of its own, no ``metrics.json`` keys
+    retired at their goal (``needs``), no metrics or plots of its own, no ``metrics.json`` keys
     (``stats_keys``, ``stats()``), no tables; ``add_ego`` keeps each ego's task in ``self.tasks``
     (by id), ``remove_ego`` drops it; an ideal V2V link (no delay, no noise) if ``needs.v2v``.
     The parameters are ``self.p``. A subclass writes ``act()`` and overrides what differs."""
@@ -20,6 +20,7 @@ class BaseController:
     needs: ClassVar[Needs] = Needs()
     metrics: ClassVar[tuple[str, ...]] = ()  # names in sumo_avoid.metrics.METRICS beside the standard set
     stats_keys: ClassVar[Keys] = Keys()  # the metrics.json keys stats() writes
+    plots: ClassVar[tuple[str, ...]] = ()  # names in sumo_avoid.plots.PLOTS drawn beside the standard ones
 
     def __init__(self, params: Any, ctx: Any = None):
         self.p = params
