@@ -134,7 +134,7 @@ def run_in(tmp: pathlib.Path, job: RunJob, timeout_s: float = math.inf, start: s
     job = dataclasses.replace(job, out_dir=str(tmp))
     started, t0 = now(), time.perf_counter()
     message = {"job": job.to_json(), "id": tmp.name, "timeout_s": timeout_s, "parent": os.getpid(),
-               "crash": faults.crash_for(job), "dispatch_wall": time.time()}
+               "crash": faults.crash_for(job)}  # each start adds "dispatch_wall" as it hands the run over
     if start == "fork":
         status = _run_forked(message, timeout_s)
     elif start == "spawn":
