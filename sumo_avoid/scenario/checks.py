@@ -14,7 +14,7 @@ import numpy as np
 from sumo_avoid.core.config import ScenarioError
 from sumo_avoid.core.interfaces import Context
 from sumo_avoid.road.walls import random_positions, square
-from sumo_avoid.sumo.inputs import InputError, check_inputs, depart_times
+from sumo_avoid.sumo.inputs import InputError, check_inputs, depart_times, open_xml
 from sumo_avoid.road.network import Road
 
 
@@ -106,12 +106,13 @@ def edges_in(path: str, mtime_ns: int, size: int) -> frozenset[str]:
     """Ids of the normal (not internal) edges of a SUMO network, parsed once per version."""
     out = set()
     try:
-        for _, el in ET.iterparse(path):
-            kind = el.attrib.get("function", "normal")
-            if el.tag == "edge" and "id" in el.attrib and kind not in ("internal", "crossing", "walkingarea"):
-                out.add(el.attrib["id"])
-            el.clear()
-    except (ET.ParseError, OSError):
+        with open_xml(path) as f:
+            for _, el in ET.iterparse(f):
+                kind = el.attrib.get("function", "normal")
+                if el.tag == "edge" and "id" in el.attrib and kind not in ("internal", "crossing", "walkingarea"):
+                    out.add(el.attrib["id"])
+                el.clear()
+    except (ET.ParseError, OSError, EOFError):
         pass
     return frozenset(out)
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import gzip
 import itertools
 import pathlib
 import xml.etree.ElementTree as ET
@@ -20,6 +21,8 @@ import xml.etree.ElementTree as ET
 DEFAULT_TYPES = frozenset({"DEFAULT_VEHTYPE", "DEFAULT_PEDTYPE", "DEFAULT_BIKETYPE", "DEFAULT_CONTAINERTYPE",
                            "DEFAULT_TAXITYPE", "DEFAULT_RAILTYPE"})
 VEHICLES = ("vehicle", "trip", "flow")
+# root elements of the route and additional files SUMO loads (<add>: the older name of <additional>)
+ROUTE_ROOTS = ("routes", "additional", "add")
 
 
 class InputError(ValueError):
@@ -47,29 +50,35 @@ class RouteInfo:
     vehicles: tuple  # (tag, id, attrib, embedded route edges or None), in file order
 
 
+def open_xml(path):
+    """An input file opened for the XML parser; SUMO reads gzip-compressed files (``*.gz``) as well."""
+    path = pathlib.Path(path)
+    return gzip.open(path) if path.suffix == ".gz" else open(path, "rb")
+
+
 def _parse(path: pathlib.Path, kinds: tuple[str, ...], what: str):
     """The root tag and the elements of an XML file; InputError if it is not (well-formed) XML of a kind."""
     try:
-        events = ET.iterparse(str(path), events=("start", "end"))
-        root = None
-        items = []
-        depth = 0
-        for ev, el in events:
-            if ev == "start":
-                if root is None:
-                    root = el.tag
-                    if root not in kinds:
-                        raise InputError(path, f"not a {what} file: its root element is <{root}>, "
-                                               f"expected <{'> or <'.join(kinds)}>")
-                depth += 1
-                continue
-            depth -= 1
-            items.append((el.tag, dict(el.attrib), depth, [c.attrib for c in el]))
-            if depth <= 1:
-                el.clear()
+        with open_xml(path) as f:
+            root = None
+            items = []
+            depth = 0
+            for ev, el in ET.iterparse(f, events=("start", "end")):
+                if ev == "start":
+                    if root is None:
+                        root = el.tag
+                        if root not in kinds:
+                            raise InputError(path, f"not a {what} file: its root element is <{root}>, "
+                                                   f"expected <{'> or <'.join(kinds)}>")
+                    depth += 1
+                    continue
+                depth -= 1
+                items.append((el.tag, dict(el.attrib), depth, [c.attrib for c in el]))
+                if depth <= 1:
+                    el.clear()
     except ET.ParseError as e:
         raise InputError(path, f"not well-formed XML ({e})") from None
-    except (OSError, UnicodeDecodeError) as e:
+    except (OSError, EOFError, UnicodeDecodeError) as e:
         raise InputError(path, f"cannot be read ({e})") from None
     if root is None:
         raise InputError(path, f"not a {what} file (empty)")
@@ -92,7 +101,7 @@ def _net(path: str, mtime_ns: int, size: int) -> NetInfo:
 @functools.lru_cache(maxsize=64)
 def _routes(path: str, mtime_ns: int, size: int) -> RouteInfo:
     types, routes, vehicles = set(), {}, []
-    for tag, a, depth, children in _parse(pathlib.Path(path), ("routes", "additional"), "SUMO route or additional"):
+    for tag, a, depth, children in _parse(pathlib.Path(path), ROUTE_ROOTS, "SUMO route or additional"):
         if tag in ("vType", "vTypeDistribution") and "id" in a:
             types.add(a["id"])
         elif tag == "routeDistribution" and "id" in a:
