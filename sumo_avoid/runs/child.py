@@ -86,6 +86,7 @@ def run(message: dict) -> int:
     try:
         marks["imported_wall"] = _IMPORTED if own_imports else time.time()
         scn = scenario.load(job.scenario, list(job.overrides), controller=job.controller, seed=job.seed)
+        after_run = None if job.kind == SCENARIO else _kind_function(job.kind)  # found before SUMO starts
         marks["loaded_wall"] = time.time()
         kind = message.get("crash")
         if kind in ("segfault", "abort"):
@@ -97,10 +98,10 @@ def run(message: dict) -> int:
         res = runner.run(scn, log_file=out / "sumo.log", progress=False, callbacks=watch)
         marks["sumo_start_wall"] = t_run + res.timings.get("setup_s", 0.0)  # road and controllers set up
         marks["run_end_wall"] = time.time()
-        if job.kind == SCENARIO:
+        if after_run is None:
             m = outputs.write_outputs(res, out, plots=scn.spec.output.plots and job.plots)
         else:
-            m = _kind_function(job.kind)(res, job, out)
+            m = after_run(res, job, out)
         marks["written_wall"] = time.time()
         finish(RunOutcome("done", metrics=m, timings_s=res.timings, cpu_s=cpu_s()))
         return 0

@@ -37,6 +37,11 @@ class RunJob:
     out_dir: str = ""  # the folder the child writes into (filled in when the job is dispatched)
     progress: bool = False  # the child writes its simulated time to out_dir/progress (runs.watch.ProgressFile)
 
+    def __post_init__(self):
+        module, sep, name = self.kind.partition(":")
+        if self.kind != SCENARIO and not (sep and module and name.isidentifier()):
+            raise ValueError(f"RunJob.kind must be {SCENARIO!r} or 'package.module:function', not {self.kind!r}")
+
     def to_json(self) -> dict:
         return {"scenario": self.scenario, "seed": self.seed, "overrides": list(self.overrides),
                 "controller": self.controller, "plots": self.plots, "key": self.key, "kind": self.kind,

@@ -6,6 +6,7 @@ Runs are short (5 s of simulated time, no plots). Crashes are real: a net that s
 test-only injection through the environment (:mod:`sumo_avoid.runs.faults`).
 """
 import contextlib
+import dataclasses
 import json
 import os
 import pathlib
@@ -21,7 +22,7 @@ from conftest import METRIC_COLS, OVERTAKING, SHORT, cli_in_process
 
 from sumo_avoid.runs import faults, worker
 from sumo_avoid.runs.worker import run_in, run_one
-from sumo_avoid.studies import batch, ledger
+from sumo_avoid.studies import batch, ledger, table4
 
 pytestmark = pytest.mark.sumo
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -201,6 +202,18 @@ def test_run_one_moves_the_run_into_place(tmp_path):
     assert not any((tmp_path / "runs" / ".tmp").iterdir())  # the temporary folder was moved into place
     assert json.loads((pathlib.Path(res.artifacts) / "metrics.json").read_text()) == res.metrics
     assert json.loads((pathlib.Path(res.artifacts) / "result.json").read_text())["artifacts"] is None  # as run_in gave it
+
+
+def test_a_job_kind_runs_its_function_in_the_child_and_a_missing_one_fails_before_sumo(tmp_path):
+    job = table4.table4_job(4, 1, agents=3, duration=1.0)
+    (tmp_path / "ok").mkdir()
+    res = run_in(tmp_path / "ok", job, 120)
+    assert res.ok and (res.metrics["v"], res.metrics["seed"]) == (4, 1) and 0 <= res.metrics["mu"] <= 1
+    (tmp_path / "bad").mkdir()
+    res = run_in(tmp_path / "bad", dataclasses.replace(job, kind="sumo_avoid.studies.table4:nope"), 120)
+    assert (res.status, res.error) == ("failed", "AttributeError: module 'sumo_avoid.studies.table4' has no "
+                                                 "attribute 'nope'")
+    assert "sumo_start_wall" not in res.clock_s  # found out before SUMO started
 
 
 def _same_files(a, b, names=("metrics.json", "trajectories.csv")) -> bool:

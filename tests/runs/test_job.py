@@ -77,3 +77,10 @@ def test_fault_injection_is_read_from_the_environment_and_a_bad_value_is_one_lin
             faults.crash_for(job)
         assert str(err.value).startswith(f"<environment>: key '{faults.ENV}': expected KIND:TARGET")
         assert "\n" not in str(err.value)
+
+
+def test_a_job_kind_is_the_standard_run_or_a_module_function():
+    assert RunJob("/abs/s.toml", kind="sumo_avoid.studies.table4:flocking_record").kind.endswith(":flocking_record")
+    for bad in ("table4", "sumo_avoid.studies.table4:", ":f", "m:f g"):
+        with pytest.raises(ValueError, match="RunJob.kind must be"):
+            RunJob("/abs/s.toml", kind=bad)
