@@ -1,6 +1,6 @@
 """Assembly from declarations (no SUMO): the layers of a run from ``ego.layers`` and what the sensor and
 layers declare (``provides_scans``, ``monitor_when_scans``), the Context's steering limits from the
-actuator's ``steering`` and its tables by name, never a plug-in's name."""
+actuator's ``steering`` and its tables by name, never a plug-in's name (the plots: tests/runs/test_declared.py)."""
 from __future__ import annotations
 
 import math
@@ -8,7 +8,7 @@ import math
 import pytest
 
 from sumo_avoid.rollout.assemble import context, layer_plan
-from sumo_avoid.runs.declared import metric_keys, plot_names
+from sumo_avoid.runs.declared import metric_keys
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.sensing import SENSORS
 from sumo_avoid.sensing.sensors import TruthSensor
@@ -65,10 +65,3 @@ def test_the_context_has_the_actuator_s_steering_limits_and_every_table():
     assert ctx.params["actuators.kinematic"] is car.table("actuators.kinematic")
     relax = context(scenario.load(OVERTAKING, ['ego.actuator="relaxation"']), 0.1)
     assert (relax.turn_radius_m, relax.yaw_rate_radps) == (0.0, math.inf)
-
-
-def test_plots_come_from_the_scene_and_the_controller_s_declaration():
-    assert plot_names(scenario.load(OVERTAKING)) == ("trajectory", "timeseries")
-    assert plot_names(scenario.load(SCENARIOS / "arena_obstacles.toml")) == ("trajectory", "timeseries", "arena")
-    assert plot_names(scenario.load(SCENARIOS / "planner" / "field.toml"))[-1] == "plans"
-    assert plot_names(scenario.load(SCENARIOS / "formation" / "gap.toml"))[-1] == "formation"
