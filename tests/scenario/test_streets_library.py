@@ -125,3 +125,30 @@ def test_district_ego_routes_are_connected_for_a_car_through_four_junctions(city
             assert lanes, f"{f.name}: no car connection {a.getID()} -> {b.getID()}"
         junctions = {e.getToNode().getID() for e in edges[:-1]}
         assert len(junctions) >= 4, f.name
+
+
+DISTRICT_SCENARIOS = [p for p in SCENARIOS if p.stem.startswith(("bologna_", "berlin_"))]
+
+
+@pytest.mark.sumo  # runs SUMO on the district
+@pytest.mark.parametrize("path", DISTRICT_SCENARIOS, ids=[p.stem for p in DISTRICT_SCENARIOS])
+def test_district_ego_departs_and_arrives_in_plain_sumo(path, tmp_path):
+    """SUMO itself, with the scenario's files (1 s steps) and driving the ego, gets it from its first edge to its
+    last, and writes nothing into the shared district folder."""
+    scn = scenario.load(path)
+    base = path.parent
+    ego_file = base / scn.spec.sim.routes[-1]
+    depart = float(next(v for v in ET.parse(ego_file).getroot().iter("vehicle") if v.get("id") == "ego").get("depart"))
+    begin = 50300 if path.stem.startswith("berlin_") else 0
+    folder = sorted(p.name for p in (base / scn.spec.sim.net).parent.iterdir())
+    r = subprocess.run([str(build.netbuild.BIN / "sumo"), "-n", str(base / scn.spec.sim.net),
+                        "-r", ",".join(str(base / f) for f in scn.spec.sim.routes),
+                        "-a", ",".join(str(base / f) for f in scn.spec.sim.additional),
+                        "--begin", str(begin), "--end", str(depart + 600), "--no-step-log", "true",
+                        "--no-warnings", "true", "--tripinfo-output", str(tmp_path / "trips.xml")],
+                       capture_output=True, text=True, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    ego, = [t for t in ET.parse(tmp_path / "trips.xml").getroot().iter("tripinfo") if t.get("id") == "ego"]
+    edges = next(v for v in ET.parse(ego_file).getroot().iter("vehicle") if v.get("id") == "ego").find("route").get("edges")
+    assert float(ego.get("depart")) < depart + 60 and ego.get("arrivalLane").rsplit("_", 1)[0] == edges.split()[-1]
+    assert sorted(p.name for p in (base / scn.spec.sim.net).parent.iterdir()) == folder
