@@ -29,6 +29,7 @@ class EgoTask:
     lanes: tuple[LanePiece, ...] = ()  # the path's lane pieces, in route order
     width_m: float = 1.8  # the ego's width (SUMO's vehicle type), m
     length_m: float = 5.0  # ... and length, m
+    vclass: str = "passenger"  # its SUMO vehicle class: which lanes it may use (LanePiece.allowed)
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,12 @@ reference path. Built by :meth:`sumo_avoid.road.network.Road.route_plan`; carrie
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from sumo_avoid.road.crossings import CrossingLink
 
 
 @dataclass(frozen=True)
@@ -47,6 +52,7 @@ class RouteLink:
     # it; traffic there meets a car whose turn swings wide at the exit (safety.wide_turns)
     oncoming: tuple[OncomingLane, ...] = ()
     leaving: tuple[str, ...] = ()  # the lane bordering the entry edge on each edge leaving the junction the other way
+    crossings: tuple[CrossingLink, ...] = ()  # the pedestrian crossings the link passes over (road.crossings)
 
 
 @dataclass(frozen=True)
@@ -63,3 +69,20 @@ class LanePiece:
     offsets_start_m: tuple[float, ...]  # d of every lane centre of the edge (by lane index) at s_start, m
     offsets_end_m: tuple[float, ...]  # ... at s_end, m
     widths_m: tuple[float, ...]  # lane widths (by lane index), m
+    allowed: tuple[bool, ...] = ()  # may the ego's vehicle class use each lane (by lane index)? () = every lane
+
+    def usable(self) -> np.ndarray:
+        """(lanes,) bool: the lanes the ego may use (its own lane always)."""
+        n = len(self.widths_m)
+        ok = np.ones(n, bool) if len(self.allowed) != n else np.asarray(self.allowed, bool)
+        if 0 <= self.lane < n:
+            ok[self.lane] = True
+        return ok
+
+
+def lane_bounds(offsets, widths, usable=None) -> tuple[float, float]:
+    """(right, left) bounds, m, of the lanes with centres ``offsets`` and ``widths`` that are ``usable``
+    (all when None): the span from the rightmost usable lane's right border to the leftmost's left border."""
+    o, w = np.asarray(offsets, float), np.asarray(widths, float)
+    ok = np.ones(len(o), bool) if usable is None else np.asarray(usable, bool)
+    return float((o - 0.5 * w)[ok].min()), float((o + 0.5 * w)[ok].max())

@@ -1,6 +1,7 @@
 """The lanes along an ego's reference path, in its route frame (SPEC §5): for an arc length s,
 the corridor [d_lo, d_hi] the lanes of the ego's own direction span across the path (d positive
-left).
+left) -- those its vehicle class may use (``LanePiece.allowed``: a car's corridor ends at the
+sidewalk, the bike lane, the bus lane).
 
 Built from :class:`~sumo_avoid.road.route.LanePiece` records (``EgoTask.lanes``); pure numpy.
 The corridor holds the lanes of the ego's direction only: a two-way road's centre line and the
@@ -15,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sumo_avoid.road.route import LanePiece
+from sumo_avoid.road.route import LanePiece, lane_bounds
 
 #: Lanes that do not continue the route narrow down to the route's lane over this length, m.
 TAPER_M = 30.0
@@ -41,9 +42,9 @@ class RouteLanes:
         pts: list[tuple[float, float, float]] = []  # (s, d_lo, d_hi) breakpoints in order of s
         n = len(pieces)
         for k, p in enumerate(pieces):
-            w = np.asarray(p.widths_m)
-            b0 = _bounds(p.offsets_start_m, w)
-            b1 = _bounds(p.offsets_end_m, w)
+            w, ok = np.asarray(p.widths_m), p.usable()
+            b0 = lane_bounds(p.offsets_start_m, w, ok)
+            b1 = lane_bounds(p.offsets_end_m, w, ok)
             a, b = p.s_start_m, p.s_end_m
             if _is_internal(p):
                 pts += [(a, *b0), (b, *b1)]
@@ -101,11 +102,6 @@ class RouteLanes:
         p = self.pieces[self._index(s)]
         f = 0.0 if p.s_end_m - p.s_start_m <= _EPS else min(max((s - p.s_start_m) / (p.s_end_m - p.s_start_m), 0.0), 1.0)
         return p, (1.0 - f) * np.asarray(p.offsets_start_m) + f * np.asarray(p.offsets_end_m)
-
-
-def _bounds(offsets, w) -> tuple[float, float]:
-    o = np.asarray(offsets, float)
-    return float((o - 0.5 * w).min()), float((o + 0.5 * w).max())
 
 
 def _junction_widening(pieces) -> tuple[np.ndarray, np.ndarray]:

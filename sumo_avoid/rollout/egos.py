@@ -32,11 +32,13 @@ class EgoBook:
 
     def take_over(self, sim, vid: str) -> EgoTask:
         info = sim.take_over(vid)
-        path, links, limits, lanes = self.road.route(list(info.route_edges), depart_lane=info.lane_index)
+        path, links, limits, lanes = self.road.route(list(info.route_edges), depart_lane=info.lane_index,
+                                                     vclass=info.vclass)
         goal = self._goal_point(vid, list(info.route_edges), path, links)
         if self.uses_goals:
             self.goals[vid] = (float(goal[0]), float(goal[1]))
-        task = EgoTask(vid, goal, path, self.cruise_speed_mps, links, limits, lanes, info.width_m, info.length_m)
+        task = EgoTask(vid, goal, path, self.cruise_speed_mps, links, limits, lanes, info.width_m, info.length_m,
+                       info.vclass)
         self.active[vid] = task
         self.tasks[vid] = task
         if self.follow_routes:

@@ -53,6 +53,7 @@ class EgoInfo:
     lane_index: int
     width_m: float = 1.8
     length_m: float = 5.0
+    vclass: str = "passenger"  # SUMO vehicle class of its type
 
 
 def sumo_args(net: pathlib.Path, routes, additional, step_s: float, seed: int, lateral_resolution_m: float,
@@ -227,7 +228,7 @@ class SumoSim:
         self._static_key = None
         self._routes[vid] = tuple(libsumo.vehicle.getRoute(vid))
         return EgoInfo(vid, self._routes[vid], libsumo.vehicle.getLaneIndex(vid), libsumo.vehicle.getWidth(vid),
-                       libsumo.vehicle.getLength(vid))
+                       libsumo.vehicle.getLength(vid), self._vclass.get(vid) or libsumo.vehicle.getVehicleClass(vid))
 
     def follow_route(self, task: EgoTask) -> None:
         """Keep ego ``task.vid`` on its route in SUMO's view while it drives on it (:mod:`.placement`)."""

@@ -151,7 +151,8 @@ class FakeSim:
         return []
 
     def take_over(self, vid):
-        return type("Info", (), {"route_edges": ("r",), "lane_index": 0, "width_m": 1.8, "length_m": 5.0})()
+        return type("Info", (), {"route_edges": ("r",), "lane_index": 0, "width_m": 1.8, "length_m": 5.0,
+                                 "vclass": "passenger"})()
 
     def follow_route(self, task):
         pass
@@ -175,7 +176,7 @@ class FakeSim:
 
 
 class StraightRoad:
-    def route(self, edges, depart_lane=None):
+    def route(self, edges, depart_lane=None, vclass=None):
         return np.array([[0.0, 0.0], [100.0, 0.0]]), (), np.zeros((0, 2)), ()
 
 

@@ -1,0 +1,184 @@
+"""An ego's route on the net (read once with :mod:`sumolib`): the reference path along its edges
+joined by internal lanes, the junction links it passes (stop line, signal, right of way, the lanes
+running the other way, the pedestrian crossings), the speed limits and the lane pieces
+(:mod:`sumo_avoid.road.route`). Built by :meth:`sumo_avoid.road.network.Road.route`."""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from sumo_avoid.road.crossings import crossing_links
+from sumo_avoid.road.polyline import _cumlen, polyline_length, polyline_point_at
+from sumo_avoid.road.right_of_way import RightOfWay, link_state
+from sumo_avoid.road.route import LanePiece, OncomingLane, RouteLink
+
+CROSSING_REACH_M = 10.0  # a link's crossings are looked for this far before and after its internal lanes, m
+
+
+class RoutePlan(NamedTuple):
+    """What :meth:`Road.route` gives for an ego's route."""
+
+    path: np.ndarray  # (P, 2) reference polyline, m
+    links: tuple[RouteLink, ...]  # junction links passed, in route order
+    speed_limits: np.ndarray  # (K, 2) [s where a lane piece starts, its speed limit], m, m/s
+    lanes: tuple[LanePiece, ...]  # lane pieces of the path
+
+
+
+def _lane_centres(lanes) -> tuple[tuple[float, ...], np.ndarray]:
+    """Widths and lateral centre positions (from the right edge, m) of an edge's lanes by index
+    (lane 0 is the rightmost)."""
+    w = np.array([float(ln.getWidth()) for ln in sorted(lanes, key=lambda ln: ln.getIndex())])
+    return tuple(w.tolist()), np.cumsum(w) - 0.5 * w
+
+
+def _first_allowed(lanes, vclass: str | None) -> int:
+    """The lowest lane index ``vclass`` may use (0 without a class, or when it may use none)."""
+    ok = [ln.getIndex() for ln in lanes if vclass is None or ln.allows(vclass)]
+    return min(ok) if ok else 0
+
+
+def _keep_mask(points: np.ndarray, tol: float = 1e-6) -> np.ndarray:
+    """False for a point within ``tol`` of the one before it (consecutive duplicates)."""
+    keep = np.ones(len(points), bool)
+    if len(points) >= 2:
+        keep[1:] = np.hypot(*np.diff(points, axis=0).T) > tol
+    return keep
+
+
+def _dedupe(points: np.ndarray, tol: float = 1e-6) -> np.ndarray:
+    """Drop consecutive duplicate points."""
+    return points[_keep_mask(points, tol)] if len(points) >= 2 else points
+
+
+
+class RoutePlanner:
+    """Routes on one sumolib net (read with internal lanes and pedestrian connections)."""
+
+    def __init__(self, net, right_of_way: RightOfWay):
+        self._net = net
+        self.right_of_way = right_of_way
+
+    def route(self, edge_ids, depart_lane: int | None = None, arrival_lane: int | None = None,
+              vclass: str | None = None) -> RoutePlan:
+        """Reference polyline (P,2) along consecutive normal edges, joined by internal lanes, and
+        the junction links it passes (:class:`RouteLink`: stop line arc length, signal, right of way),
+        the speed limits along it ((K, 2): arc length where a lane piece starts, its speed, m/s) and
+        its lane pieces (:class:`LanePiece`: edge, lane, where the edge's other lanes lie across it).
+
+        On every edge one lane is used that has a connection to the next edge (the one
+        nearest to the lane we entered on, or to ``depart_lane`` on the first edge). If the
+        entry lane differs from that lane (e.g. requested depart/arrival lane has no such
+        connection), the path blends from one lane to the other over the first
+        min(half the edge, 60 m). With ``vclass`` each lane piece says which lanes of its edge that
+        class may use (:attr:`LanePiece.allowed`), and a lane the path is free to choose (the last
+        edge's without an arrival lane) is the lowest-index one the class may use.
+        """
+        edges = [self._net.getEdge(e) for e in edge_ids]
+        if not edges:
+            raise ValueError("empty route")
+        pieces: list[np.ndarray] = []
+        link_at: list[tuple[object, int]] = []  # (connection, points before its stop line)
+        limit_at: list[tuple[float, int]] = []  # (speed limit, points before its lane piece)
+        piece_at: list[tuple] = []  # (edge, lane, offsets at start, offsets at end, widths, points before it)
+        n_points = 0
+        entry = depart_lane
+        for k, e in enumerate(edges):
+            lanes = e.getLanes()
+            if k + 1 < len(edges):
+                conns = e.getConnections(edges[k + 1])
+                mine = [c for c in conns if vclass is None or (c.getFromLane().allows(vclass)
+                                                               and c.getToLane().allows(vclass))]
+                conns = mine or conns  # a class no connection admits keeps SUMO's route as it is
+                if not conns:
+                    raise ValueError(f"no connection {e.getID()} -> {edges[k + 1].getID()}")
+                ref = entry if entry is not None else 0
+                want_to = arrival_lane if (k + 2 == len(edges) and arrival_lane is not None) else None
+                conn = min(conns, key=lambda c: (abs(c.getFromLane().getIndex() - ref),
+                                                 0 if want_to is None else abs(c.getToLane().getIndex() - want_to),
+                                                 c.getFromLane().getIndex()))
+                exit_idx = conn.getFromLane().getIndex()
+            else:
+                conn = None
+                exit_idx = arrival_lane if arrival_lane is not None else (entry if entry is not None else
+                                                                          _first_allowed(lanes, vclass))
+            exit_idx = int(np.clip(exit_idx, 0, len(lanes) - 1))
+            allowed = () if vclass is None else tuple(bool(ln.allows(vclass)) for ln in
+                                                      sorted(lanes, key=lambda ln: ln.getIndex()))
+            entry_idx = exit_idx if entry is None else int(np.clip(entry, 0, len(lanes) - 1))
+            exit_shape = np.asarray(lanes[exit_idx].getShape(), float)
+            limit_at.append((float(lanes[exit_idx].getSpeed()), n_points))
+            widths, centres = _lane_centres(lanes)
+            exit_off = tuple((centres - centres[exit_idx]).tolist())
+            if entry_idx != exit_idx:
+                entry_shape = np.asarray(lanes[entry_idx].getShape(), float)
+                L = polyline_length(exit_shape)
+                s0 = min(0.5 * L, 60.0)
+                cum = _cumlen(exit_shape)
+                pieces += [entry_shape[:1], polyline_point_at(exit_shape, s0)[None], exit_shape[cum > s0]]
+                piece_at.append((e.getID(), exit_idx, tuple((centres - centres[entry_idx]).tolist()), exit_off, widths,
+                                 allowed, n_points))
+                piece_at.append((e.getID(), exit_idx, exit_off, exit_off, widths, allowed, n_points + 2))
+            else:
+                pieces.append(exit_shape)
+                piece_at.append((e.getID(), exit_idx, exit_off, exit_off, widths, allowed, n_points))
+            n_points = sum(len(piece) for piece in pieces)
+            if conn is not None:
+                link_at.append((conn, n_points))
+                for lane, shape, speed in self._via_lanes(conn):
+                    limit_at.append((speed, n_points))
+                    piece_at.append((lane.getEdge().getID(), lane.getIndex(), (0.0,), (0.0,),
+                                     (float(lane.getWidth()),), (), n_points))
+                    pieces.append(shape)
+                    n_points += len(shape)
+                entry = conn.getToLane().getIndex()
+        points = np.concatenate(pieces)
+        keep = _keep_mask(points, tol=1e-3)
+        path = points[keep]
+        cum = _cumlen(path)
+        kept_before = np.concatenate([[0], np.cumsum(keep)])  # kept points among the first n
+
+        def s_at(n: int) -> float:  # arc length where the points after the first n begin
+            return float(cum[kept_before[n] - 1]) if kept_before[n] else 0.0
+
+        links = tuple(self._link(conn, s_at(n), path, cum) for conn, n in link_at)
+        limits = np.array([(s_at(n), v) for v, n in limit_at], float).reshape(-1, 2)
+        starts = [s_at(n) for *_, n in piece_at]
+        ends = starts[1:] + [float(cum[-1])]
+        lane_pieces = tuple(LanePiece(a, max(a, b), edge, lane, o0, o1, w, ok)
+                            for (edge, lane, o0, o1, w, ok, _), a, b in zip(piece_at, starts, ends))
+        return RoutePlan(path, links, limits, lane_pieces)
+
+    def _link(self, conn, s_stop_m: float, path: np.ndarray, cum: np.ndarray) -> RouteLink:
+        tls = conn.getTLSID() or ""
+        through = sum(v.getLength() for v in self.right_of_way.via_chain(conn))
+        return RouteLink(float(s_stop_m), conn.getFrom().getToNode().getID(), tls,
+                         int(conn.getTLLinkIndex()) if tls else -1, link_state(conn), conn.getDirection() or "",
+                         self.right_of_way.foes(conn), self._oncoming(conn.getTo(), conn),
+                         tuple(o.lane for o in self._oncoming(conn.getFrom())),
+                         crossing_links(self._net, conn, path, cum, s_stop_m - CROSSING_REACH_M,
+                                        s_stop_m + through + CROSSING_REACH_M))
+
+    def _oncoming(self, edge, conn=None) -> tuple[OncomingLane, ...]:
+        """The lane bordering ``edge`` on every edge that runs the other way between the same two
+        junctions (its highest-index lane, next to the opposite direction in SUMO); ``gives_way``:
+        one of its links gives way to ``conn``."""
+        a, b = edge.getFromNode().getID(), edge.getToNode().getID()
+        mine = np.asarray(edge.getLanes()[-1].getShape(), float)
+        tangent = mine[1] - mine[0]
+        out = []
+        for e in edge.getToNode().getOutgoing():
+            if e.getToNode().getID() == a and e.getFromNode().getID() == b and e.getID() != edge.getID():
+                lane = e.getLanes()[-1]
+                rel = np.asarray(lane.getShape(), float)[-1] - mine[0]  # its end, beside the start of ``edge``
+                side = 1 if tangent[0] * rel[1] - tangent[1] * rel[0] > 0 else -1
+                inside = tuple(dict.fromkeys(v.getID() for c in lane.getOutgoing() for v in self.right_of_way.via_chain(c)))
+                waits = conn is not None and self.right_of_way.gives_way_to(lane, conn)
+                out.append(OncomingLane(lane.getID(), float(lane.getLength()), side, inside, waits))
+        return tuple(out)
+
+    def _via_lanes(self, conn) -> list[tuple]:
+        """(lane, shape, speed limit) of the chain of internal lanes of a connection (possibly split in several)."""
+        return [(lane, np.asarray(lane.getShape(), float), float(lane.getSpeed()))
+                for lane in self.right_of_way.via_chain(conn)]
