@@ -17,6 +17,7 @@ from sumo_avoid.metrics.standard import (
     PhiWall,
     PluginStats,
     RunInfo,
+    VulnerableRoadUsers,
 )
 from sumo_avoid.metrics.ttc import MinTTC2D
 
@@ -24,6 +25,7 @@ METRICS = Registry("metric")
 METRICS.register("run", RunInfo)
 METRICS.register("collisions", Collisions)
 METRICS.register("min_gap", MinGap)
+METRICS.register("vru", VulnerableRoadUsers)
 METRICS.register("phi_coll", PhiColl)
 METRICS.register("phi_wall", PhiWall)
 METRICS.register("plugin_stats", PluginStats)
@@ -37,7 +39,7 @@ METRICS.register("ssm", SurrogateSafety)
 METRICS.register("ttc2d", MinTTC2D)
 
 # ttc2d last: its pair search is the widest, and the shared search keeps the widest one
-STANDARD = ("run", "collisions", "min_gap", "phi_coll", "phi_wall", "plugin_stats", "motion", "rules",
+STANDARD = ("run", "collisions", "vru", "min_gap", "phi_coll", "phi_wall", "plugin_stats", "motion", "rules",
             "road_use", "comfort", "ssm", "ttc2d")
 
 

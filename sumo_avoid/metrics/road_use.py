@@ -16,7 +16,12 @@ whose length (m) counts wholly when its midpoint qualifies, with the heading of 
   incl. internal ones and junction shapes), or in an arena outside its walls or inside an obstacle.
   φ_wall measures how far the footprint sticks out; this measures how long the centre was out.
 
-All three are summed over the egos (m), 0.0 when no ego ever moved.
+* ``forbidden_lane_m``: the midpoint is inside a normal lane (nearest centre line of those holding it,
+  outside every junction shape) that the net's permissions close to the ego's vehicle class -- a
+  sidewalk, a bike lane, a bus lane for a car -- read from the net, not from where SUMO maps the ego.
+  None in an arena.
+
+All are summed over the egos (m), 0.0 when no ego ever moved.
 """
 from __future__ import annotations
 
@@ -31,9 +36,10 @@ from sumo_avoid.road.walls import outside_distance as arena_outside_distance
 from sumo_avoid.rollout.result import RunResult
 
 
-def ego_segments(traj: pd.DataFrame, egos: EgoRows | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def ego_segments(traj: pd.DataFrame, egos: EgoRows | None = None, with_ids: bool = False) -> tuple:
     """Every ego's consecutive rows (by step) as segments: (K,2) midpoints, (K,2) displacements, m,
-    and (K,2) unit heading vectors of each segment's first row; segments of zero length are left out."""
+    and (K,2) unit heading vectors of each segment's first row (and, ``with_ids``, (K,) its ego's id);
+    segments of zero length are left out."""
     egos = EgoRows.of(traj) if egos is None else egos
     e = egos.table
     o = egos.by_id()
@@ -43,11 +49,25 @@ def ego_segments(traj: pd.DataFrame, egos: EgoRows | None = None) -> tuple[np.nd
     keep = (code[1:] == code[:-1]) & (np.hypot(d[:, 0], d[:, 1]) > 0)
     mid = 0.5 * (p[:-1] + p[1:])
     h = e["heading"].to_numpy(float)[o][:-1]
-    return mid[keep], d[keep], np.column_stack([np.cos(h), np.sin(h)])[keep]
+    out = mid[keep], d[keep], np.column_stack([np.cos(h), np.sin(h)])[keep]
+    return (*out, egos.ids[code[:-1][keep]]) if with_ids else out
+
+
+def forbidden(road, mid: np.ndarray, vclass: np.ndarray) -> np.ndarray:
+    """(K,) True where a midpoint lies in a normal lane (outside every junction shape) that the net
+    does not open to the class of its ego (SUMO's ``allow``/``disallow``, :attr:`Road.elements`)."""
+    if not len(mid):
+        return np.zeros(0, bool)
+    lane, _ = road.lanes.lane_at(mid)
+    inside = (lane >= 0) & ~road.lanes.in_junction(mid)
+    lanes = road.elements.lanes
+    ids = road.lanes.ids
+    return np.array([bool(ok) and vc not in lanes[ids[k]].allow if vc else False
+                     for k, ok, vc in zip(lane, inside, vclass)], bool)
 
 
 def road_use(run: RunResult) -> dict:
-    mid, d, hd = ego_segments(run.traj, ego_rows(run))
+    mid, d, hd, who = ego_segments(run.traj, ego_rows(run), with_ids=True)
     length = np.hypot(d[:, 0], d[:, 1])
     reverse_m = float(length[np.einsum("ij,ij->i", hd, d) < 0].sum())
     scene = run.scene
@@ -55,17 +75,25 @@ def road_use(run: RunResult) -> dict:
         out = run.road.outside_distance(mid) > 0
         wrong = run.road.lanes.against(mid, hd) if len(mid) else np.zeros(0, bool)
         wrong_m = float(length[wrong].sum())
+        vclass = np.array([_vclass(run, v) for v in who], dtype=object)
+        banned_m = float(length[forbidden(run.road, mid, vclass)].sum())
     else:
         out = arena_outside_distance(mid, scene.walls, scene.obstacles) > 0
-        wrong_m = None
-    return {"wrong_way_m": wrong_m, "off_road_m": float(length[out].sum()), "reverse_m": reverse_m}
+        wrong_m = banned_m = None
+    return {"wrong_way_m": wrong_m, "off_road_m": float(length[out].sum()), "reverse_m": reverse_m,
+            "forbidden_lane_m": banned_m}
+
+
+def _vclass(run: RunResult, vid: str) -> str:
+    task = run.tasks.get(vid)
+    return run.classes.get(vid) or (task.vclass if task is not None else "")
 
 
 class RoadUse(Metric):
-    """wrong_way_m, off_road_m, reverse_m: metres the egos drove facing a lane's traffic, off the
-    road, and backwards."""
+    """wrong_way_m, off_road_m, reverse_m, forbidden_lane_m: metres the egos drove facing a lane's
+    traffic, off the road, backwards, and on lanes closed to their class."""
 
-    keys = Keys(("wrong_way_m", "off_road_m", "reverse_m"))
+    keys = Keys(("wrong_way_m", "off_road_m", "reverse_m", "forbidden_lane_m"))
 
     def compute(self, run: RunResult) -> dict:
         return road_use(run)

@@ -3,11 +3,12 @@ smallest gap, SPEC §1.1's phi_coll and phi_wall, the plug-ins' counters and the
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 
 from sumo_avoid import __version__
 from sumo_avoid.core.geometry import footprint_corners
 from sumo_avoid.core.types import Keys
-from sumo_avoid.metrics import basic
+from sumo_avoid.metrics import basic, vru
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.metrics.ego_rows import EgoRows
 from sumo_avoid.metrics.pairs import Rows
@@ -73,20 +74,55 @@ class RunInfo(Metric):
 class Collisions(Metric):
     """Footprint contact events found by the plug-in, SUMO's own reports, and where they disagree."""
 
-    keys = Keys(("collisions", "sumo_collisions"),
+    keys = Keys(("collisions", "sumo_collisions", "sumo_ego_collisions"),
                 nested=("collision_events", "sumo_collision_events", "collision_pairs_only_ours",
                         "collision_pairs_only_sumo", "collision_disagreements"))
 
     def compute(self, run: RunResult) -> dict:
-        events = run.memo("collision_events", lambda: basic.collision_events(run.traj, rows=pair_rows(run)))
+        events = all_collision_events(run)
         sumo = run.sumo_events
+        egos = set(run.traj.loc[run.traj["is_ego"].astype(bool), "id"].astype(str)) if len(run.traj) else set()
         ours = {tuple(sorted(p)) for p in zip(events["a"], events["b"])}
         theirs = {tuple(sorted(p)) for p in zip(sumo["a"], sumo["b"])}
         return {"collisions": len(events), "collision_events": events.to_dict(orient="records"),
                 "sumo_collisions": len(sumo), "sumo_collision_events": sumo.to_dict(orient="records"),
+                "sumo_ego_collisions": sum(a in egos or b in egos for a, b in zip(sumo["a"], sumo["b"])),
                 "collision_pairs_only_ours": sorted(map(list, ours - theirs)),
                 "collision_pairs_only_sumo": sorted(map(list, theirs - ours)),
-                "collision_disagreements": disagreements(run.traj, events, sumo, ours - theirs, theirs - ours)}
+                "collision_disagreements": disagreements(recorded(run), events, sumo, ours - theirs, theirs - ours)}
+
+
+def person_pairs(run: RunResult):
+    """Every (ego, person) pair at one recorded step with its gap (metrics.vru), computed once per run."""
+    return run.memo("person_pairs", lambda: vru.ego_person_pairs(run.traj, run.persons))
+
+
+def all_collision_events(run: RunResult):
+    """The plug-in's contact events: vehicles (footprints) and persons (discs), by step, with the class of
+    the party that is not the ego (or of the second ego) in ``other_class``."""
+    def compute():
+        cars = basic.collision_events(run.traj, rows=pair_rows(run))
+        people = vru.person_contact_events(run.traj, person_pairs(run))
+        if people.empty:
+            ev = cars
+        elif cars.empty:
+            ev = people
+        else:
+            ev = pd.concat([cars, people], ignore_index=True)
+        ev = ev.sort_values(["step", "a", "b"], kind="stable").reset_index(drop=True)
+        if run.classes:  # a run recorded with classes (every run since persons are recorded)
+            egos = set(run.traj.loc[run.traj["is_ego"].astype(bool), "id"].astype(str))
+            other = [b if a in egos else a for a, b in zip(ev["a"].astype(str), ev["b"].astype(str))]
+            ev = ev.assign(other_class=[run.classes.get(o, "") for o in other])
+        return ev
+    return run.memo("collision_events", compute)
+
+
+def recorded(run: RunResult):
+    """The vehicles' and persons' rows together (for looking up where SUMO had a party)."""
+    if run.persons is None or run.persons.empty:
+        return run.traj
+    return pd.concat([run.traj, run.persons], ignore_index=True)
 
 
 def _lanes_at(traj, step, ids) -> list[str]:
@@ -95,6 +131,15 @@ def _lanes_at(traj, step, ids) -> list[str]:
     now = traj[traj["step"] == step]
     lane = dict(zip(now["id"].astype(str), now["lane"].fillna("").astype(str)))
     return [lane.get(v, "") for v in ids]
+
+
+def _unrecorded(traj, step, ids) -> list[str]:
+    """The ids of ``ids`` not in the recording at ``step`` or the step before (SUMO reports a collision
+    after the step it happened in)."""
+    if "step" not in traj or traj.empty:
+        return list(ids)
+    near = set(traj.loc[traj["step"].isin((step, step - 1)), "id"].astype(str))
+    return [v for v in ids if v not in near]
 
 
 def why_only_ours(la: str, lb: str, a: str, b: str) -> str:
@@ -113,7 +158,9 @@ def why_only_ours(la: str, lb: str, a: str, b: str) -> str:
 
 
 def disagreements(traj, events, sumo, only_ours, only_sumo) -> list[dict]:
-    """One line per vehicle pair only one of the two collision checks found, and why."""
+    """One line per pair only one of the two collision checks found, and why. A pair SUMO reports
+    with a party the recording does not have at that time is said to be unseen by the plug-in, never
+    explained away."""
     out = []
     for pair in sorted(only_ours):
         ev = events[(events["a"] == pair[0]) & (events["b"] == pair[1])].iloc[0]
@@ -122,10 +169,29 @@ def disagreements(traj, events, sumo, only_ours, only_sumo) -> list[dict]:
                     "why": why_only_ours(la, lb, *pair)})
     for pair in sorted(only_sumo):
         ev = sumo[(sumo["a"] == pair[0]) & (sumo["b"] == pair[1])].iloc[0]
+        missing = _unrecorded(traj, ev["step"], pair)
+        if missing:
+            out.append({"pair": list(pair), "found_by": "SUMO", "time_s": float(ev["time_s"]),
+                        "why": f"SUMO reported a {ev['type']} on {ev['lane']}; the plug-in has no record of "
+                               f"{', '.join(repr(m) for m in missing)} at that time: it cannot judge it"})
+            continue
         out.append({"pair": list(pair), "found_by": "SUMO", "time_s": float(ev["time_s"]),
                     "why": f"SUMO reported a {ev['type']} on {ev['lane']} from its lane geometry; the "
                            f"footprints (exact poses) did not overlap"})
     return out
+
+
+class VulnerableRoadUsers(Metric):
+    """SPEC §6: the egos' contacts with persons and cyclists (``vru_collisions``, also in ``collisions``)
+    and the smallest gap to one (:mod:`sumo_avoid.metrics.vru`)."""
+
+    keys = Keys(("vru_collisions", "min_gap_vru_m"))
+
+    def compute(self, run: RunResult) -> dict:
+        ev = all_collision_events(run)
+        hit = int(ev["other_class"].isin(vru.VRU_CLASSES).sum()) if "other_class" in ev else 0
+        gap = vru.min_gap_vru_m(person_pairs(run), vru.cyclist_gaps(run.traj, run.classes))
+        return {"vru_collisions": hit, "min_gap_vru_m": gap}
 
 
 class MinGap(Metric):

@@ -26,7 +26,7 @@ import numpy as np
 from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.metrics.pairs import Rows
-from sumo_avoid.metrics.standard import pair_rows
+from sumo_avoid.metrics.standard import pair_rows, recorded
 from sumo_avoid.rollout.result import RunResult
 
 CHUNK = 200_000  # pairs per vectorised batch (memory)
@@ -97,9 +97,13 @@ def min_ttc2d_s(traj, rows: Rows | None = None, params: TTC2D = TTC2D()) -> floa
 
 
 class MinTTC2D(Metric):
-    """min_ttc2d_s: the smallest constant-velocity 2-D time to footprint contact of an ego, s."""
+    """min_ttc2d_s: the smallest constant-velocity 2-D time to footprint contact of an ego, s; persons
+    count as the rectangles of their recorded length and width."""
 
     keys = Keys(("min_ttc2d_s",))
 
     def compute(self, run: RunResult) -> dict:
-        return {"min_ttc2d_s": min_ttc2d_s(run.traj, pair_rows(run))}
+        if run.persons is None or run.persons.empty:
+            return {"min_ttc2d_s": min_ttc2d_s(run.traj, pair_rows(run))}
+        both = recorded(run).sort_values(["step", "id"], kind="stable").reset_index(drop=True)
+        return {"min_ttc2d_s": min_ttc2d_s(both, Rows.of(both))}

@@ -1,5 +1,5 @@
-"""The files of one finished run: metrics.json, timings.json, trajectories.csv, the plug-ins'
-tables (e.g. detections.csv) and the plots (:func:`sumo_avoid.runs.declared.plot_names`).
+"""The files of one finished run: metrics.json, timings.json, trajectories.csv, persons.csv (when
+the run had persons outside vehicles; the same columns), the plug-ins' tables (e.g. detections.csv) and the plots (:func:`sumo_avoid.runs.declared.plot_names`).
 
 ``metrics.json`` holds only simulation results (no wall-clock fields), written with sorted keys,
 so the same scenario and seed give a byte-identical file. Timings go to ``timings.json``.
@@ -34,6 +34,8 @@ def write_outputs(res: RunResult, out_dir: pathlib.Path, plots: bool = True) -> 
     (out_dir / "metrics.json").write_text(json.dumps(m, indent=2, sort_keys=True) + "\n")
     (out_dir / "timings.json").write_text(json.dumps(clean(timings(res)), indent=2, sort_keys=True) + "\n")
     res.traj.to_csv(out_dir / "trajectories.csv", index=False)
+    if res.persons is not None and len(res.persons):  # pedestrians (and riders while they walk)
+        res.persons.to_csv(out_dir / "persons.csv", index=False)
     for name, table in res.tables.items():
         table.to_csv(out_dir / f"{name}.csv", index=False)
     if plots:

@@ -52,6 +52,7 @@ import numpy as np
 from sumo_avoid.road.polyline import polyline_track
 from sumo_avoid.road.regulation import RED, STOP_SIGNS, RulesParams
 from sumo_avoid.core.types import EgoTask, Keys
+from sumo_avoid.safety.crossing_rule import CrossingRule
 from sumo_avoid.safety.wide_turns import oncoming_first, wide_exits
 from sumo_avoid.road.yielding import (
     STAND_MPS,
@@ -103,7 +104,7 @@ class TrafficRulesLayer:
 
     needs_scans = False
     monitor_when_scans = False
-    stats_keys = Keys(("rules_signal_stops", "rules_speed_caps", "rules_yields"))  # what stats() writes
+    stats_keys = Keys(("rules_signal_stops", "rules_speed_caps", "rules_yields", "rules_crossing_yields"))
 
     def __init__(self, params: RulesParams, ctx=None):
         self.p = params
@@ -114,10 +115,12 @@ class TrafficRulesLayer:
         self._allway = False  # an ego's route crosses an all-way stop: follow who stands since when
         self._stand: dict[str, tuple] = {}  # vehicle id -> (start, end (nan: still)) of its last standing run, s
         self._turn_radius_m = float(getattr(ctx, "turn_radius_m", 0.0) or 0.0)  # 0: no drivable line, no wide exits
+        self._crossings = CrossingRule(params)  # give way at pedestrian crossings, never stop on one
+        self._crossing_yields: set[tuple[str, float]] = set()  # (ego, crossing entry s) where it held the ego
 
     def add_ego(self, task: EgoTask) -> None:
         wide = wide_exits(task, self._turn_radius_m)
-        watch = (any(lk.tls or lk.foes or lk.state in STOP_SIGNS for lk in task.links) or bool(wide)
+        watch = (any(lk.tls or lk.foes or lk.state in STOP_SIGNS or lk.crossings for lk in task.links) or bool(wide)
                  or self.p.speed_factor is not None)
         self._egos[task.vid] = _Ego(task, watch, wide=wide)
         self._allway |= any(lk.state == "w" and lk.foes for lk in task.links)
@@ -220,6 +223,10 @@ class TrafficRulesLayer:
             if give < v or give < 0.5:
                 self._yields.add((vid, yline))
             speed = math.hypot(out[i, 0], out[i, 1])
+            cross, cline = self._crossings.cap(e.task, e.s_m, v, snap, int(r), float(snap.length[r]))
+            if cross < v or cross < 0.5:
+                self._crossing_yields.add((vid, cline))
+            give = min(give, cross)
             cap = min(sig, road, give)
             if speed > cap:
                 self._caps += road < min(sig, give)
@@ -228,4 +235,4 @@ class TrafficRulesLayer:
 
     def stats(self) -> dict:
         return {"rules_signal_stops": len(self._held), "rules_speed_caps": self._caps,
-                "rules_yields": len(self._yields)}
+                "rules_yields": len(self._yields), "rules_crossing_yields": len(self._crossing_yields)}

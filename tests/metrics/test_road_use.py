@@ -58,7 +58,7 @@ def test_a_car_facing_the_traffic_is_against_it_whichever_way_it_moves():
 
 def test_no_ego_moved():
     rows = path("still", np.zeros(5), np.full(5, -100.0), 0.0)
-    assert road_use(result(rows)) == {"wrong_way_m": 0.0, "off_road_m": 0.0, "reverse_m": 0.0}
+    assert road_use(result(rows)) == {"wrong_way_m": 0.0, "off_road_m": 0.0, "reverse_m": 0.0, "forbidden_lane_m": 0.0}
 
 
 def test_real_run_a_blind_ego_backing_up_a_one_way_road():
