@@ -12,8 +12,9 @@ whose length (m) counts wholly when its midpoint qualifies, with the heading of 
   lane's direction and is not wrong-way driving (it is ``reverse_m``); it used to count here,
   which made an escape manoeuvre look like driving against traffic.
 * ``reverse_m``: the motion is more than 90° from the heading (backing up), anywhere.
-* ``off_road_m``: the midpoint is outside the drivable area (``Road.outside_distance`` > 0; lanes
-  incl. internal ones and junction shapes), or in an arena outside its walls or inside an obstacle.
+* ``off_road_m``: the midpoint is outside the drivable area of the ego's vehicle class
+  (``Road.outside_distance`` > 0; the lanes open to it, internal ones included, and junction shapes),
+  or in an arena outside its walls or inside an obstacle.
   φ_wall measures how far the footprint sticks out; this measures how long the centre was out.
 
 * ``forbidden_lane_m``: the midpoint is inside a normal lane (nearest centre line of those holding it,
@@ -31,7 +32,7 @@ import pandas as pd
 from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.metrics.ego_rows import EgoRows
-from sumo_avoid.metrics.standard import ego_rows
+from sumo_avoid.metrics.standard import ego_class, ego_rows
 from sumo_avoid.road.walls import outside_distance as arena_outside_distance
 from sumo_avoid.rollout.result import RunResult
 
@@ -72,10 +73,13 @@ def road_use(run: RunResult) -> dict:
     reverse_m = float(length[np.einsum("ij,ij->i", hd, d) < 0].sum())
     scene = run.scene
     if scene.walls is None:
-        out = run.road.outside_distance(mid) > 0
+        vclass = np.array([ego_class(run, v) or "" for v in who], dtype=object)
+        out = np.zeros(len(mid), bool)
+        for vc in np.unique(vclass):
+            rows = vclass == vc
+            out[rows] = run.road.outside_distance(mid[rows], vc or None) > 0
         wrong = run.road.lanes.against(mid, hd) if len(mid) else np.zeros(0, bool)
         wrong_m = float(length[wrong].sum())
-        vclass = np.array([_vclass(run, v) for v in who], dtype=object)
         banned_m = float(length[forbidden(run.road, mid, vclass)].sum())
     else:
         out = arena_outside_distance(mid, scene.walls, scene.obstacles) > 0
@@ -83,10 +87,6 @@ def road_use(run: RunResult) -> dict:
     return {"wrong_way_m": wrong_m, "off_road_m": float(length[out].sum()), "reverse_m": reverse_m,
             "forbidden_lane_m": banned_m}
 
-
-def _vclass(run: RunResult, vid: str) -> str:
-    task = run.tasks.get(vid)
-    return run.classes.get(vid) or (task.vclass if task is not None else "")
 
 
 class RoadUse(Metric):

@@ -19,13 +19,28 @@ RULES_LAYER = "traffic"  # the rules of the road: metrics.json's "safety" names 
 
 
 def ego_outside_distance(run: RunResult) -> np.ndarray:
-    """Per ego-step, how far the ego's footprint sticks out of the road's drivable area, m."""
+    """Per ego-step, how far the ego's footprint sticks out of the road's drivable area for its vehicle
+    class (the lanes open to it and the junctions: a car on the sidewalk is out), m."""
     ego = run.traj[run.traj["is_ego"]]
     if ego.empty:
         return np.zeros(0)
     corners = footprint_corners(ego[["x", "y"]].to_numpy(), ego["heading"].to_numpy(),
                                 ego["length"].to_numpy(), ego["width"].to_numpy())
-    return run.road.footprint_outside_distance(corners)
+    ids = ego["id"].astype(str).to_numpy()
+    classes = {v: ego_class(run, v) for v in np.unique(ids)}
+    if len(set(classes.values())) <= 1:  # one class (the usual case): one query
+        return run.road.footprint_outside_distance(corners, next(iter(classes.values()), None))
+    out = np.zeros(len(ego))
+    for v, vc in classes.items():
+        rows = ids == v
+        out[rows] = run.road.footprint_outside_distance(corners[rows], vc)
+    return out
+
+
+def ego_class(run: RunResult, vid: str) -> str | None:
+    """An ego's SUMO vehicle class (its drivable area: the lanes open to it), None when not known."""
+    task = run.tasks.get(vid)
+    return run.classes.get(vid) or (task.vclass if task is not None else None)
 
 
 def pair_rows(run: RunResult) -> Rows:

@@ -72,6 +72,29 @@ def _ro(a) -> np.ndarray:
     return arr
 
 
+def _surface(lanes, nodes):
+    """The union of the lanes' polygons (centre shape buffered by width/2, flat caps) and the junction shapes."""
+    polys = []
+    for ln in lanes:
+        shape = np.asarray(ln.getShape(), float)
+        if len(shape) >= 2:
+            polys.append(LineString(shape).buffer(ln.getWidth() / 2.0, cap_style="flat", join_style="mitre",
+                                                  mitre_limit=3.0))
+    for node in nodes:
+        shp = node.getShape()
+        if shp is not None and len(shp) >= 3:
+            jp = shapely.make_valid(Polygon(shp))
+            if jp.area > 1e-6:
+                polys.append(jp)
+    area = shapely.unary_union(polys)
+    area = area.buffer(0.01, join_style="mitre").buffer(-0.01, join_style="mitre")
+    area = shapely.simplify(area, 1e-3)
+    if not isinstance(area, (Polygon, MultiPolygon)):  # GeometryCollection after ops
+        area = shapely.unary_union([g for g in getattr(area, "geoms", [area]) if g.area > 0])
+    shapely.prepare(area)
+    return area
+
+
 # --------------------------------------------------------------------------- Road
 class Road:
     """Immutable road geometry of one SUMO network. Build with :meth:`from_net_file`."""
@@ -82,24 +105,9 @@ class Road:
         s(self, "_net", net)
         s(self, "elements", read_elements(net))  # lanes with permissions, junctions, crossings, walking areas
         lanes = [ln for e in net.getEdges(withInternal=True) for ln in e.getLanes()]
-        polys = []
-        for ln in lanes:
-            shape = np.asarray(ln.getShape(), float)
-            if len(shape) >= 2:
-                polys.append(LineString(shape).buffer(ln.getWidth() / 2.0, cap_style="flat", join_style="mitre",
-                                                      mitre_limit=3.0))
-        for node in net.getNodes():
-            shp = node.getShape()
-            if shp is not None and len(shp) >= 3:
-                jp = shapely.make_valid(Polygon(shp))
-                if jp.area > 1e-6:
-                    polys.append(jp)
-        area = shapely.unary_union(polys)
-        area = area.buffer(0.01, join_style="mitre").buffer(-0.01, join_style="mitre")
-        area = shapely.simplify(area, 1e-3)
-        if not isinstance(area, (Polygon, MultiPolygon)):  # GeometryCollection after ops
-            area = shapely.unary_union([g for g in getattr(area, "geoms", [area]) if g.area > 0])
-        shapely.prepare(area)
+        area = _surface(lanes, net.getNodes())
+        s(self, "_lanes_all", tuple(lanes))
+        s(self, "_areas", {})  # vehicle class -> its drivable area (area_for), built on first use
         s(self, "area", area)
         s(self, "bounds", tuple(float(v) for v in area.bounds))
 
@@ -139,22 +147,34 @@ class Road:
         return _load_cached(p, os.stat(p).st_mtime_ns)
 
     # ------------------------------------------------------------------ area queries
-    def outside_distance(self, points) -> np.ndarray:
-        """(M,2) points -> (M,) distance to the drivable area (0 inside or on the edge)."""
+    def outside_distance(self, points, vclass: str | None = None) -> np.ndarray:
+        """(M,2) points -> (M,) distance to the drivable area (0 inside or on the edge); with ``vclass``,
+        to that class's area (:meth:`area_for`)."""
+        area = self.area_for(vclass)
         pts = np.asarray(points, dtype=float).reshape(-1, 2)
         out = np.zeros(len(pts))
         if len(pts) == 0:
             return out
-        inside = shapely.contains_xy(self.area, pts[:, 0], pts[:, 1])
+        inside = shapely.contains_xy(area, pts[:, 0], pts[:, 1])
         if not inside.all():
             idx = np.flatnonzero(~inside)
-            out[idx] = shapely.distance(self.area, shapely.points(pts[idx]))
+            out[idx] = shapely.distance(area, shapely.points(pts[idx]))
         return out
 
-    def footprint_outside_distance(self, corners) -> np.ndarray:
-        """(N,4,2) footprint corners -> (N,) max corner distance outside the area."""
+    def footprint_outside_distance(self, corners, vclass: str | None = None) -> np.ndarray:
+        """(N,4,2) footprint corners -> (N,) max corner distance outside the area (``vclass``'s)."""
         c = np.asarray(corners, dtype=float).reshape(-1, 4, 2)
-        return self.outside_distance(c.reshape(-1, 2)).reshape(-1, 4).max(axis=1, initial=0.0)
+        return self.outside_distance(c.reshape(-1, 2), vclass).reshape(-1, 4).max(axis=1, initial=0.0)
+
+    def area_for(self, vclass: str | None):
+        """The drivable area of a vehicle class: the lanes (internal ones included) the net opens to it
+        and the junction shapes; :attr:`area` (every lane) when it may use every lane or for None."""
+        if vclass is None:
+            return self.area
+        if vclass not in self._areas:
+            mine = [ln for ln in self._lanes_all if ln.allows(vclass)]
+            self._areas[vclass] = self.area if len(mine) == len(self._lanes_all) else _surface(mine, self._net.getNodes())
+        return self._areas[vclass]
 
     def segments_near(self, point, radius_m: float, *, with_kind: bool = False):
         """Boundary segments and solid lines within ``radius_m`` of ``point``.
