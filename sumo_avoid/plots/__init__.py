@@ -18,9 +18,11 @@ from sumo_avoid.plots.trajectories import plot_timeseries, plot_trajectories
 
 
 def trajectory(res, m: dict, out_dir: pathlib.Path, title: str) -> None:
-    """trajectory.png: every vehicle's path on the road, collisions and goals marked."""
+    """trajectory.png: every vehicle's and person's path on the road (sidewalks, bike and bus lanes,
+    crossings drawn), collisions and goals marked."""
     events = pd.DataFrame(m["collision_events"], columns=["step", "time_s", "a", "b", "x", "y"])
-    plot_trajectories(res.road, res.traj, out_dir / "trajectory.png", collisions=events, goals=res.goals, title=title)
+    plot_trajectories(res.road, res.traj, out_dir / "trajectory.png", collisions=events, goals=res.goals, title=title,
+                      persons=res.persons)
 
 
 def timeseries(res, m: dict, out_dir: pathlib.Path, title: str) -> None:

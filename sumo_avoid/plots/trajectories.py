@@ -23,6 +23,7 @@ from matplotlib.patches import Polygon as MplPolygon
 from matplotlib.path import Path
 
 from sumo_avoid.core import geometry
+from sumo_avoid.plots.street import draw_persons, draw_street
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -128,12 +129,13 @@ def _extent(traj, extra_pts, road):
 
 
 def plot_trajectories(road: "Road", traj: "pd.DataFrame", out_png, *, collisions=None, goals=None,
-                      title: str = "", obstacles=None) -> str:
+                      title: str = "", obstacles=None, persons=None) -> str:
     """Bird's-eye figure of a run (see module docstring for ``traj`` columns); returns the path.
 
     ``goals``: {ego_id: (x, y)}; ``collisions``: rows with x, y (or an id column plus
     step/time_s to look the position up in ``traj``) and optionally time_s, other id;
-    ``obstacles``: list of (K,2) polygons. Very elongated extents (e.g. a 1.5 km straight)
+    ``obstacles``: list of (K,2) polygons; ``persons``: their rows (as ``traj``), drawn as thin tracks,
+    with sidewalks, bike and bus lanes and crossings (:mod:`sumo_avoid.plots.street`). Very elongated extents (e.g. a 1.5 km straight)
     are drawn on a wide figure with a stated vertical exaggeration so the lanes stay readable.
     """
     traj = traj.sort_values(["id", "step"] if "step" in traj else ["id", "time_s"])
@@ -162,14 +164,14 @@ def plot_trajectories(road: "Road", traj: "pd.DataFrame", out_png, *, collisions
     ego_ids = list(dict.fromkeys(traj.loc[is_ego, "id"].astype(str)))
     other_ids = list(dict.fromkeys(traj.loc[~is_ego, "id"].astype(str)))
     groups = {str(k): g for k, g in traj.groupby(traj["id"].astype(str), sort=False)}
-    handles = _draw(ax, road, groups, ego_ids, other_ids, obstacles, goals, coll)
+    handles = _draw(ax, road, groups, ego_ids, other_ids, obstacles, goals, coll, persons=persons)
     wide = exaggeration > 1 or fig_w / fig_h > 3
     centre = None if wide else _zoom_centre(groups, ego_ids, coll)
     legend_loc = "best"
     if centre is not None and min(dx, dy) > 6 * ZOOM_HALF_M:  # only where the close-up is small against the view
         corners = _emptiest_corners(traj, xmin, xmax, ymin, ymax)
         inset = ax.inset_axes([*_CORNERS[corners[0]], 0.42, 0.42])
-        _draw(inset, road, groups, ego_ids, other_ids, obstacles, goals, coll, labels=False)
+        _draw(inset, road, groups, ego_ids, other_ids, obstacles, goals, coll, labels=False, persons=persons)
         cx, cy = centre
         inset.set_xlim(cx - ZOOM_HALF_M, cx + ZOOM_HALF_M)
         inset.set_ylim(cy - ZOOM_HALF_M, cy + ZOOM_HALF_M)
@@ -196,7 +198,7 @@ def plot_trajectories(road: "Road", traj: "pd.DataFrame", out_png, *, collisions
     return _save(fig, out_png)
 
 
-def _draw(ax, road, groups, ego_ids, other_ids, obstacles, goals, coll, labels: bool = True) -> list:
+def _draw(ax, road, groups, ego_ids, other_ids, obstacles, goals, coll, labels: bool = True, persons=None) -> list:
     """Everything of a trajectory figure on one axes (the main view, or the close-up); returns the
     legend handles."""
     ax.set_facecolor(OFFROAD_FILL)
@@ -218,6 +220,7 @@ def _draw(ax, road, groups, ego_ids, other_ids, obstacles, goals, coll, labels: 
                Line2D([], [], color="#808080", lw=1, ls="--", label="lane line")]
     if any_median:
         handles.append(Line2D([], [], color=MEDIAN, lw=1.5, label="solid (no crossing)"))
+    handles += draw_street(ax, road) + draw_persons(ax, persons)
 
     for ob in obstacles:
         ax.add_patch(MplPolygon(ob, closed=True, facecolor="#222222", edgecolor="black", zorder=3))
