@@ -76,6 +76,13 @@ class RadarParams:
                                       "radars cannot), with side_fov_deg and side_range_m")
     side_fov_deg: float = field_doc(150.0, doc="full horizontal field of view of each side radar, degrees (< 180)")
     side_range_m: float = field_doc(40.0, doc="maximum range of each side radar, m")
+    person_range_factor: float = field_doc(0.42, positive=True, doc="a person is seen only within this fraction "
+                                           "of the range (radar equation, range ~ RCS^(1/4): -5 dBsm against a "
+                                           "car's +10 dBsm; docs/radar.md)")
+    person_detection_prob: float = field_doc(0.9, doc="probability that a visible person is reported in a scan "
+                                                      "(on top of detection_prob)")
+    cyclist_range_factor: float = field_doc(0.56, positive=True, doc="... a cyclist (vehicle class bicycle): "
+                                            "0 dBsm against +10 dBsm")
 
     def __post_init__(self):
         if self.max_range_m <= 0:
@@ -93,6 +100,10 @@ class RadarParams:
             raise ValueError("0 < radar.side_fov_deg < 180")
         if self.side_range_m <= 0:
             raise ValueError("radar.side_range_m > 0")
+        if not 0 <= self.person_detection_prob <= 1:
+            raise ValueError("0 <= radar.person_detection_prob <= 1")
+        if self.person_range_factor > 1 or self.cyclist_range_factor > 1:
+            raise ValueError("radar.person_range_factor and cyclist_range_factor <= 1")
 
     def mounts(self) -> tuple[str, ...]:
         """The radars these parameters fit on each ego, front first."""
@@ -192,9 +203,26 @@ class Radar:
         e, n = self._candidates(spos, fwd, centre, radius, rows, p.max_range_m, math.cos(half), math.sin(half))
         ptr = np.concatenate([[0], np.cumsum(np.bincount(e, minlength=len(rows)))]).astype(np.int64)
         ego, tgt, rng, az, vr = self._scan(spos, hd, svel, polys, vel, ptr, n, half, p.max_range_m)
+        if snap.is_person.any() or "bicycle" in snap.vclass:  # small targets: shorter range, missed more often
+            ego, tgt, rng, az, vr = self._small_targets(snap, ego, tgt, rng, az, vr)
         det = Detections(snap.time_s, tuple(ego_ids), spos, hd, svel, ego, rng, az, vr,
                          tuple([ids[i] for i in tgt.tolist()]), mount=self.mount)
         return self._imperfect(det)
+
+    def _small_targets(self, snap, ego, tgt, range_m, az, vr):
+        """Drop returns of persons beyond ``person_range_factor`` x the range (cyclists: their factor)
+        and, of the persons left, each with probability 1 - ``person_detection_prob``."""
+        p = self.p
+        vehicle = tgt < snap.n
+        row = np.where(vehicle, tgt, 0)
+        person = vehicle & snap.is_person[row]
+        cyclist = vehicle & (np.asarray(snap.vclass, dtype=object)[row] == "bicycle") if snap.n else person
+        reach = np.where(person, p.person_range_factor, np.where(cyclist, p.cyclist_range_factor, 1.0)) * p.max_range_m
+        keep = range_m <= reach
+        if p.person_detection_prob < 1 and (person & keep).any():
+            k = np.flatnonzero(person & keep)
+            keep[k] = self.rng.random(len(k)) < p.person_detection_prob
+        return ego[keep], tgt[keep], range_m[keep], az[keep], vr[keep]
 
     def _imperfect(self, det: Detections) -> Detections:
         p, g = self.p, self.rng

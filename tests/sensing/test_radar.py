@@ -429,3 +429,30 @@ def test_compiled_footprints_and_candidates_equal_the_numpy_and_kdtree_versions(
         assert np.array_equal(e0, e1) and np.array_equal(n0, n1), k
         pairs += len(e1)
     assert pairs > 2000
+
+
+def test_persons_and_cyclists_are_seen_at_a_shorter_range_than_cars():
+    """Range 100 m: a car is seen at 60 m; a person only within 0.42 x 100 = 42 m, a cyclist within 56 m
+    (their smaller radar cross-sections, docs/radar.md); spread across the field so none hides another."""
+    rows = [EGO, ("car", 62.0, 30.0, 0, 0, 4.0, 1.8), ("near_p", 40.0, -10.0, 0, 0, 0.215, 0.478),
+            ("far_p", 46.0, 10.0, 0, 0, 0.215, 0.478), ("near_b", 50.0, 20.0, 0, 0, 1.6, 0.65),
+            ("far_b", 58.0, -20.0, 0, 0, 1.6, 0.65)]
+    base = snap(rows)
+    s = Snapshot(0.0, base.ids, base.pos, base.vel, base.heading, base.length, base.width, base.is_ego,
+                 vclass=("passenger", "passenger", "pedestrian", "pedestrian", "bicycle", "bicycle"),
+                 is_person=np.array([False, False, True, True, False, False]))
+    seen = set(radar(person_detection_prob=1.0).measure(s, ("ego",)).target)
+    assert seen == {"car", "near_p", "near_b"}
+    assert set(radar().measure(base, ("ego",)).target) == {"car", "near_p", "far_p", "near_b", "far_b"}  # as cars
+
+
+def test_a_person_is_missed_with_its_own_probability():
+    rows = [EGO] + [(f"p{k}", 10.0 + 2.0 * k, 8.0 * (k % 5) - 16.0, 0, 0, 0.215, 0.478) for k in range(10)]
+    base = snap(rows)
+    s = Snapshot(0.0, base.ids, base.pos, base.vel, base.heading, base.length, base.width, base.is_ego,
+                 vclass=("passenger",) + ("pedestrian",) * 10, is_person=np.arange(11) > 0)
+    r = radar(person_detection_prob=0.5)
+    counts = [len(r.measure(s, ("ego",)).target) for _ in range(200)]
+    visible = len(radar(person_detection_prob=1.0).measure(s, ("ego",)).target)
+    assert visible >= 8
+    assert 0.4 * visible < np.mean(counts) < 0.6 * visible
