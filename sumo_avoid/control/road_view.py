@@ -200,7 +200,7 @@ class RoadView:
         vel[:, 1] -= vel[:, 0] * slope
         return d - self.line.offset(s), wrap_angle(rel_heading - np.arctan(slope)), vel
 
-    def scene(self, obs: Observation, row: int, sense_radius_m: float) -> FrenetScene:
+    def scene(self, obs: Observation, row: int, sense_radius_m: float, vru_margin_m: float = 0.0) -> FrenetScene:
         snap = obs.snapshot
         q = snap.pos[row]
         s, d = self.locate(q)
@@ -209,12 +209,12 @@ class RoadView:
         v_s, v_d = self.frame.velocity_to_frenet(s, d_raw, snap.vel[row][None, :])
         _, h_rel, vel = self._from_line(np.array([s]), d_raw, np.array([wrap_angle(snap.heading[row] - h_path)]),
                                         np.array([[v_s[0], v_d[0]]]))
-        o_pos, o_hd, o_len, o_wid, o_vel = obstacle_vehicles(obs, row, q, sense_radius_m)
+        o_pos, o_hd, o_len, o_wid, o_vel, vru = obstacle_vehicles(obs, row, q, sense_radius_m)
         if len(o_pos):
             os_, od = self.frame.to_frenet(o_pos, np.full(len(o_pos), s), sense_radius_m)
             keep = np.isfinite(os_) & (np.abs(od) < MAX_ABS_D_M) & (np.abs(os_ - s) < sense_radius_m)
             os_, od = os_[keep], od[keep]
-            o_hd, o_len, o_wid, o_vel = o_hd[keep], o_len[keep], o_wid[keep], o_vel[keep]
+            o_hd, o_len, o_wid, o_vel, vru = o_hd[keep], o_len[keep], o_wid[keep], o_vel[keep], vru[keep]
             o_rel = wrap_angle(o_hd - self.frame.heading_at(os_))
             # a vehicle wholly outside the ego's lanes (oncoming traffic beyond the centre line,
             # a car on a road nearby) is behind a bound the ego keeps to: not an obstacle to it; on a
@@ -227,6 +227,10 @@ class RoadView:
             lo, hi = np.minimum(lo, line_lo + off), np.maximum(hi, line_hi + off)
             keep = (od + half > lo - OUTSIDE_MARGIN_M) & (od - half < hi + OUTSIDE_MARGIN_M)
             os_, od, o_rel, o_len, o_wid, o_vel = os_[keep], od[keep], o_rel[keep], o_len[keep], o_wid[keep], o_vel[keep]
+            # a person or cyclist in or at the ego's lanes counts as grown by vru_margin_m all round (one
+            # on the sidewalk beside them is behind the bound, as above: the ego passes it, not crawls)
+            grow = 2.0 * vru_margin_m * vru[keep]
+            o_len, o_wid = o_len + grow, o_wid + grow
             vs, vd = self.frame.velocity_to_frenet(os_, od, o_vel)
             od, o_rel, o_vel = self._from_line(os_, od, o_rel, np.column_stack([vs, vd]))
             o_pos = np.column_stack([os_, od])

@@ -10,6 +10,7 @@ persons and cyclists, from the recording.
   EU ITS Directive 2010/40/EU's "non-motorised road users, such as pedestrians and cyclists, as well
   as motorcyclists and persons with disabilities or reduced mobility", in SUMO's classes. A cyclist is
   a vehicle: its contacts are found by the footprint check of all vehicles, and counted again here.
+  (:data:`sumo_avoid.road.elements.VRU_CLASSES`.)
 * ``min_gap_vru_m``: the smallest distance between an ego's footprint and a VRU (a person's disc, a
   cyclist's footprint) present at the same step; None when no ego ever shares a step with one.
 """
@@ -19,8 +20,8 @@ import numpy as np
 import pandas as pd
 
 from sumo_avoid.core.geometry import convex_distance, footprint_corners
+from sumo_avoid.road.elements import VRU_CLASSES
 
-VRU_CLASSES = frozenset({"pedestrian", "wheelchair", "bicycle", "scooter", "moped", "motorcycle"})
 PERSON_EVENT_COLS = ["step", "time_s", "a", "b", "x", "y"]
 CONTACT_TOL_M = 1e-9
 

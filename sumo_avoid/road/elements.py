@@ -19,6 +19,9 @@ from typing import Mapping
 import numpy as np
 
 CROSSING, WALKINGAREA, INTERNAL = "crossing", "walkingarea", "internal"
+#: Vulnerable road users in SUMO's classes: the EU ITS Directive 2010/40/EU's "non-motorised road users,
+#: such as pedestrians and cyclists, as well as motorcyclists and persons with disabilities or reduced mobility"
+VRU_CLASSES = frozenset({"pedestrian", "wheelchair", "bicycle", "scooter", "moped", "motorcycle"})
 
 
 def _frozen(a) -> np.ndarray:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from sumo_avoid.core.geometry import footprint_corners, near_any
+from sumo_avoid.road.elements import VRU_CLASSES
 
 ASSUMED_LENGTH_M = 4.5
 ASSUMED_WIDTH_M = 1.8
@@ -81,18 +82,22 @@ def perceived_obstacles(det, vid: str, length_m: float = ASSUMED_LENGTH_M, width
 
 
 def obstacle_vehicles(obs, row: int, q, radius_m: float):
-    """Other vehicles for the ego at snapshot ``row`` as (pos, heading, length, width, vel):
+    """Other road users for the ego at snapshot ``row`` as (pos, heading, length, width, vel, vru):
     from the radar when ``obs.detections`` is set (moving along ``obs.route_heading`` of that ego
-    if given, see :func:`perceived_boxes`), else ground truth within ``radius_m`` of q."""
+    if given, see :func:`perceived_boxes`), else ground truth within ``radius_m`` of q. ``vru``
+    (bool) marks the vulnerable road users (a person, a cyclist:
+    :data:`~sumo_avoid.road.elements.VRU_CLASSES`), known only from ground truth (radar: none)."""
     snap = obs.snapshot
     if obs.detections is not None:  # one scan per radar mount (front, rear)
         route = obs.route_heading
         along = None if route is None else float(route[obs.index(snap.ids[row])])
         parts = [perceived_obstacles(d, snap.ids[row], along=along) for d in obs.detections]
-        return tuple(np.concatenate(x) for x in zip(*parts)) if len(parts) > 1 else parts[0]
+        out = tuple(np.concatenate(x) for x in zip(*parts)) if len(parts) > 1 else parts[0]
+        return (*out, np.zeros(len(out[0]), bool))
     d = np.hypot(*(snap.pos - np.asarray(q, float)).T)
     o = np.flatnonzero((d < radius_m) & (np.arange(snap.n) != row))
-    return snap.pos[o], snap.heading[o], snap.length[o], snap.width[o], snap.vel[o]
+    vru = snap.is_person[o] | np.isin(np.asarray(snap.vclass, dtype=object)[o], list(VRU_CLASSES))
+    return snap.pos[o], snap.heading[o], snap.length[o], snap.width[o], snap.vel[o], vru
 
 
 def radar_obstacles(obs, known_pos, gate_m: float):

@@ -39,14 +39,14 @@ def test_force_is_minus_gradient_of_potential():
 
 
 # --- a standing car whose nose reaches into the ego's margin ("squeeze") ---------------------
-def _waiting_car_scene(o_vel_d=0.0, lo=-2.35):
+def _waiting_car_scene(o_vel_d=0.0, lo=-2.35, ahead_m=5.3):
     """Like the spider-net junction case: the ego at d 0.46 (its lanes span -2.35..2.35), a car
     5.3 m ahead at d 2.5 facing the other way, turned 0.16 rad: its nearest corner (d 1.254, 0.68 m
     ahead of the ego's front) reaches 0.106 m into the ego's strip; a shift of 0.206 m clears it
     by 0.1 m and fits 0.68 tan 35 deg = 0.476 m. Standing (or closing across at ``o_vel_d``)."""
     from sumo_avoid.control.road_view import FrenetScene
 
-    return FrenetScene(170.2, 0.46, 0.0, np.zeros(2), 4.5, 1.8, np.array([[175.5, 2.5]]), np.array([np.pi + 0.16]),
+    return FrenetScene(170.2, 0.46, 0.0, np.zeros(2), 4.5, 1.8, np.array([[170.2 + ahead_m, 2.5]]), np.array([np.pi + 0.16]),
                        np.array([4.5]), np.array([1.8]), np.array([[0.0, o_vel_d]]),
                        lambda s: (np.full(len(s), lo), np.full(len(s), 2.35)))
 
@@ -59,9 +59,18 @@ def _driver():
 
 
 def test_a_standing_car_the_ego_can_steer_clear_of_is_passed_at_a_crawl():
+    from sumo_avoid.core.geometry import footprint_corners
+
     ctl, sc = _driver(), _waiting_car_scene()
     fld = ctl.field(sc, sc.q[None], np.array([185.2, 0.0]))
-    assert fld.v_safe == ctl.p.squeeze_speed_mps  # 2 m/s, not a standstill
+    # reached at squeeze speed (2 m/s, not a standstill): from the gap to its nearest corner (0.68 m),
+    # the speed from which the ego slows to 2 m/s at gov_decel_mps2
+    gap = footprint_corners(sc.o_pos, sc.o_heading, sc.o_length, sc.o_width)[0, :, 0].min() - (sc.s + 0.5 * sc.length)
+    assert gap == pytest.approx(0.68, abs=0.01)
+    expected = np.sqrt(ctl.p.squeeze_speed_mps**2 + 2.0 * ctl.p.gov_decel_mps2 * gap)
+    assert fld.v_safe == pytest.approx(expected, rel=1e-9)
+    far = _waiting_car_scene(ahead_m=40.0)
+    assert ctl.field(far, far.q[None], np.array([220.0, 0.0])).v_safe > 10.0  # not a crawl from 40 m away
     assert fld.F[0, 0] > 0.0 and fld.F[0, 1] < 0.0  # on, and away from it (right)
 
 

@@ -66,6 +66,8 @@ class ApfParams:
     lookahead_min_m: float = field_doc(15.0, doc="smallest carrot distance along the route, m")
     lookahead_time_s: float = field_doc(1.5, doc="carrot distance per unit speed, s")
     sense_radius_m: float = field_doc(100.0, doc="obstacles farther than this are ignored, m")
+    vru_margin_m: float = field_doc(1.0, doc="a person or cyclist (ground truth) counts as grown by this much on "
+                                             "every side: the ego keeps this much more room to it than to a car, m")
     gov_decel_mps2: float = field_doc(4.0, doc="speed governor: braking it plans with, m/s^2")
     gov_standstill_m: float = field_doc(2.0, doc="speed governor: gap kept at standstill, m")
     gov_margin_m: float = field_doc(0.4, doc="speed governor: lateral margin of the corridor ahead, m")
@@ -146,7 +148,7 @@ class ApfDriver:
         return np.array([min(sc.s + ahead, view.length_m), lateral_offset])
 
     def scene(self, obs: Observation, row: int, vid: str) -> FrenetScene:
-        return self.views[vid].scene(obs, row, self.p.sense_radius_m)
+        return self.views[vid].scene(obs, row, self.p.sense_radius_m, self.p.vru_margin_m)
 
     # --- the field (Frenet) ----------------------------------------------------------------
     def field(self, sc: FrenetScene, q_cand: np.ndarray, target: np.ndarray, heading: float | None = None) -> Field:
@@ -243,14 +245,17 @@ class ApfDriver:
 
     def _governor(self, q, hd, L, W, corners, vel, squeeze) -> float:
         """The speed from which the ego stops behind anything in its strip ahead (``squeeze``
-        (O,) bool: vehicles passed at ``squeeze_speed_mps`` instead)."""
+        (O,) bool: vehicles passed at ``squeeze_speed_mps`` instead, reached at that speed: from afar
+        the ego approaches at the speed from which it slows to it in time)."""
         nd = np.array([-hd[1], hd[0]])
         rel = corners - q
         x = rel @ hd  # (O,4)
         y = rel @ nd
         half = 0.5 * W + self.p.gov_margin_m
         ahead = (y.max(axis=1) >= -half) & (y.min(axis=1) <= half) & (x.max(axis=1) > 0.5 * L)
-        v_squeeze = self.p.squeeze_speed_mps if (ahead & squeeze).any() else np.inf
+        sq = ahead & squeeze  # passed at squeeze speed: reached at that speed, braking at gov_decel_mps2
+        v_squeeze = (float(np.sqrt(self.p.squeeze_speed_mps**2 + 2.0 * self.p.gov_decel_mps2 *
+                                   np.maximum(x[sq].min(axis=1) - 0.5 * L, 0.0)).min()) if sq.any() else np.inf)
         ahead &= ~squeeze
         if not ahead.any():
             return v_squeeze

@@ -122,6 +122,8 @@ class GaPlannerParams(GaParams):
     road_corridor_margin_m: float = field_doc(0.4, doc="road: corridor_margin_m of the governor's strip, m")
     road_sense_radius_m: float = field_doc(100.0, positive=True, doc="road: vehicles farther than this are "
                                                                     "left out of the plan, m")
+    vru_margin_m: float = field_doc(1.0, doc="road: a person or cyclist (ground truth) counts as grown by this "
+                                             "much on every side, m")
     road_follow_gap_m: float = field_doc(6.0, doc="road: a moving vehicle blocks its lane where the ego would be "
                                                   "closer than this (bumper to bumper) along the road, m")
     road_gap_headway_s: float = field_doc(1.0, doc="road: that gap grows by this x the speed difference, s")
@@ -334,7 +336,7 @@ class GaPlannerController(BaseController):
         p, snap = self.pr, obs.snapshot
         pos, t = snap.pos[row], snap.time_s
         st.now, st.pos = t, np.asarray(pos, float)
-        sc = st.view.scene(obs, row, p.road_sense_radius_m)
+        sc = st.view.scene(obs, row, p.road_sense_radius_m, p.vru_margin_m)
         moving = np.hypot(*sc.o_vel.T) >= p.static_speed_mps
         trigger = self._trigger(st, obs, vid, pos, t)
         if trigger:
