@@ -4,6 +4,7 @@ from sumo_avoid.core.registry import Registry
 from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import clean
 from sumo_avoid.metrics.comfort import Comfort
+from sumo_avoid.metrics.crossing_use import CrossingViolations
 from sumo_avoid.metrics.flock_score import FlockingOrder
 from sumo_avoid.metrics.formation_score import FormationScore
 from sumo_avoid.metrics.road_use import RoadUse
@@ -33,13 +34,14 @@ METRICS.register("motion", Motion)
 METRICS.register("flocking", FlockingOrder)
 METRICS.register("formation", FormationScore)
 METRICS.register("rules", RuleViolations)
+METRICS.register("crossings", CrossingViolations)
 METRICS.register("road_use", RoadUse)
 METRICS.register("comfort", Comfort)
 METRICS.register("ssm", SurrogateSafety)
 METRICS.register("ttc2d", MinTTC2D)
 
 # ttc2d last: its pair search is the widest, and the shared search keeps the widest one
-STANDARD = ("run", "collisions", "vru", "min_gap", "phi_coll", "phi_wall", "plugin_stats", "motion", "rules",
+STANDARD = ("run", "collisions", "vru", "min_gap", "phi_coll", "phi_wall", "plugin_stats", "motion", "rules", "crossings",
             "road_use", "comfort", "ssm", "ttc2d")
 
 

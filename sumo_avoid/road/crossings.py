@@ -32,6 +32,7 @@ from shapely.geometry import LineString
 KERB_ZONE_M = 2.0  # a person on a walking area this close to a crossing's end may step onto it, m
 APPROACH_MPS = 0.2  # ... when walking towards it faster than this, m/s (or standing)
 STAND_MPS = 0.1  # slower than this a person stands, m/s
+PEOPLE_GREEN = frozenset("Gg")  # a crossing's signal states in which its people may walk
 
 
 @dataclass(frozen=True)
@@ -126,3 +127,11 @@ def persons_at(crossing: CrossingLink, lane, pos, vel) -> np.ndarray:
         standing = np.hypot(vel[:, 0], vel[:, 1]) < STAND_MPS
         on |= near & close & ((speed_in > APPROACH_MPS) | standing)
     return on
+
+
+def people_may_cross(crossing: CrossingLink, signals) -> bool:
+    """The crossing is the people's to cross now: unsignalised, or its signal green for them."""
+    if not crossing.tls:
+        return True
+    state = signals.get(crossing.tls, "")
+    return 0 <= crossing.link_index < len(state) and state[crossing.link_index] in PEOPLE_GREEN

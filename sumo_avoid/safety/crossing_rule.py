@@ -6,7 +6,7 @@
   person is on it or about to step onto it (:func:`~sumo_avoid.road.crossings.persons_at`), the ego
   stops ``stop_margin_m`` before the crossing's area -- when it can still stop braking at
   ``commit_decel_mps2`` at most; a crossing whose own signal is not green for the people (``G``/``g``)
-  is not theirs to cross;
+  is not theirs to cross (:func:`~sumo_avoid.road.crossings.people_may_cross`);
 * never stop on a crossing: the ego does not enter a crossing while a vehicle stands (slower than
   :data:`QUEUE_MPS`) on its path within its own length plus :data:`ROOM_M` beyond the crossing.
 
@@ -19,21 +19,12 @@ import math
 
 import numpy as np
 
-from sumo_avoid.road.crossings import persons_at
+from sumo_avoid.road.crossings import people_may_cross, persons_at
 from sumo_avoid.road.polyline import polyline_project_many
 
 QUEUE_MPS = 1.0  # a vehicle slower than this beyond a crossing is standing in a queue, m/s
 ROOM_M = 1.0  # the ego enters a crossing only with its length + this free beyond it, m
 LANE_HALF_M = 1.6  # a vehicle this close to the ego's path (centre to path) is on it, m
-PEOPLE_GREEN = frozenset("Gg")
-
-
-def people_may_cross(crossing, signals) -> bool:
-    """The crossing is the people's to cross now: unsignalised, or its signal green for them."""
-    if not crossing.tls:
-        return True
-    state = signals.get(crossing.tls, "")
-    return 0 <= crossing.link_index < len(state) and state[crossing.link_index] in PEOPLE_GREEN
 
 
 def room_beyond(crossing, path: np.ndarray, snap, ego_row: int, need_m: float) -> bool:

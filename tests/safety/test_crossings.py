@@ -60,6 +60,10 @@ def test_a_blind_ego_runs_a_pedestrian_over_and_every_count_sees_it(street):
     assert m["collision_pairs_only_ours"] == [] and m["collision_pairs_only_sumo"] == []
     assert m["min_gap_vru_m"] == 0.0 and m["min_ttc2d_s"] == 0.0
     assert len(res.persons) and set(res.persons["id"]) == {"walker"} and res.classes["walker"] == "pedestrian"
+    # it entered the zebra with the walker on it or stepping onto it: a crossing violation
+    assert m["crossing_violations"] == 1
+    (ev,) = m["crossing_events"]
+    assert ev["crossing"] == ":Z_c0" and ev["persons"] == ["walker"] and ev["kind"] == "entered"
 
 
 def test_the_ego_stops_before_the_zebra_while_a_person_crosses_and_goes_when_it_is_free(street):
@@ -79,3 +83,4 @@ def test_the_ego_stops_before_the_zebra_while_a_person_crosses_and_goes_when_it_
     assert len(stood) > 0  # it stood just before the crossing (stop margin 1 m) ...
     assert front_x.iloc[-1] > 150.0  # ... and drove on once the person had left it
     assert m["min_gap_vru_m"] > 2.0
+    assert m["crossing_violations"] == 0 and [e["persons"] for e in m["crossing_events"]] == [[]]
