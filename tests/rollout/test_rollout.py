@@ -305,7 +305,7 @@ def test_output_metrics_adds_to_the_standard_set():
     from sumo_avoid.scenario import spec as scenario
 
     scn = scenario.load(SCENARIOS / "crash_straight.toml", ['output.metrics=["run", "flocking"]'])
-    assert metric_names(scn) == ("run", "collisions", "min_gap", "phi_coll", "phi_wall", "plugin_stats", "motion", "rules",
-                                 "road_use", "comfort", "ssm", "ttc2d", "flocking")
+    assert metric_names(scn) == ("run", "collisions", "vru", "min_gap", "phi_coll", "phi_wall", "plugin_stats", "motion",
+                                 "rules", "crossings", "road_use", "comfort", "ssm", "ttc2d", "flocking")
     m = run_metrics(runner.run(scn))
     assert {"goal_reached", "collisions", "min_gap_m", "mu", "v_vel", "wrong_way_m", "min_ttc_s", "min_ttc2d_s"} <= set(m)
