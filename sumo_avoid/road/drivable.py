@@ -4,12 +4,11 @@ where their width allows.
 SUMO draws a junction's internal lanes with radii a car cannot drive: netgenerate's random nets
 turn right at 2.7-4.7 m where a car's centre needs ~5 m (``actuator.min_turn_radius_m``). A car
 that follows the lane centre starts turning when the lane does, turns at its limit and comes out
-wide, facing the traffic of the opposite lane (rand04 junction 420: 10 m against the lane on every
-seed). A driver takes such a turn wide *before* it and cuts in at its apex. This module finds that
+wide, facing the traffic of the opposite lane. A driver takes such a turn wide *before* it and cuts in at its apex. This module finds that
 line as a lateral offset d(s) from the route's reference path (the SPEC §5 frame: points
 x_i = P(s_i) + d_i n(s_i) on a grid of spacing h = 0.5 m), by a linear programme over each tight
 stretch (where the path's curvature, smoothed over 3 m, exceeds 1 / (f R_min): a turn, not a kink
-of the lane polyline between two edges; over 1 m a 12 deg kink read as tight):
+of the lane polyline between two edges):
 
     minimise   W_out sum u_i  +  W_k sum sigma_i  +  sum |d_i| h
     subject to |c_i| <= h_i^2 / (g R_min)                      (the car can drive it: hard)
@@ -40,11 +39,11 @@ STEP_M = 0.5
 #: The line may start moving out this far before a tight stretch (and end this far after it), m.
 REACH_M = 25.0
 #: The line is planned for this multiple of the car's smallest turning radius: following it, the car
-#: keeps steering in reserve to correct its errors (planned at the radius itself, a car that fell
-#: 0.3 m behind the line in a tight turn could never catch up and drifted 1.5 m out).
+#: keeps steering in reserve to correct its errors (at the radius itself a car that falls behind the
+#: line in a tight turn cannot catch up and drifts out).
 RADIUS_FACTOR = 1.25
-#: ... and never tighter than this multiple (hard): at the radius itself a car that fell behind could
-#: never catch up (rand08: 1.9 m outside the line after a 130 deg turn).
+#: ... and never tighter than this multiple (hard): at the radius itself a car that falls behind
+#: cannot catch up.
 HARD_FACTOR = 1.1
 #: Sequential linear programmes: the line's normal and chord length from the previous solution;
 #: at most this many, until the line moves less than TOL_M.

@@ -43,9 +43,7 @@ def lane_blockers(s: float, speed: float, length: float, o_pos, o_len, o_wid, o_
     nearer, bumper to bumper, than GAP_MIN_M plus, for a connected vehicle (``member`` (O,) True;
     it knows the plan), GAP_HEADWAY_S x the closing speed, and for any other vehicle the secure gap
     (:func:`secure_gap_m`) of whichever of the two is behind: a car coming up fast from behind must
-    be able to brake for the car that moved in, even if that one then brakes too (a formation
-    member that merged 2 lanes in front of a car at 25.7 m/s and slowed behind its braking leader
-    was rear-ended)."""
+    be able to brake for the car that moved in, even if that one then brakes too."""
     o_pos = np.asarray(o_pos, float).reshape(-1, 2)
     if not len(o_pos):
         return np.zeros(0, bool)

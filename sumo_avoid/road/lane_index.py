@@ -85,9 +85,9 @@ class LaneIndex:
     def against(self, points, motion) -> np.ndarray:
         """(M,2) points and (M,2) directions (the ``wrong_way_m`` metric passes the car's heading)
         -> (M,) True where the point is in a normal lane, outside every junction, and the direction
-        of *every* lane holding it is more than 90° from the given direction. (Where a random net
-        lays two roads over each other, a car in its own lane is also in the other road's: it is no
-        ghost driver there; netgenerate rand05, edges 277 and -183.)"""
+        of *every* lane holding it is more than 90° from the given direction. (Where a net lays two
+        roads over each other, a car in its own lane is also in the other road's: it is no ghost
+        driver there.)"""
         pts = np.asarray(points, float).reshape(-1, 2)
         mv = np.asarray(motion, float).reshape(-1, 2)
         out = np.zeros(len(pts), bool)

@@ -18,8 +18,7 @@ junctions) up to ``horizon_m`` before F's stop line.
 An *unregulated* junction has no junction logic (SUMO's drivers go through without looking; SUMO
 checks no collisions there): every link from another edge whose chain crosses the ego's, or ends
 in the same lane, is a foe, and the ego's link counts as equal ('=', :func:`link_state`): it gives
-way to all of them (on a netgenerate spider net, where the centre is unregulated, the ego drove
-into a car crossing it).
+way to all of them.
 """
 from __future__ import annotations
 

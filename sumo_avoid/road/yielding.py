@@ -17,11 +17,10 @@ conflict point by its own length: with x the distance of its front bumper to the
 On a signalised foe link, a foe slower than ``START_MPS`` (5 m/s) whose front is within
 ``AT_LINE_M`` (5 m) of its stop line or past it is setting off from the line (its light turned
 green): it arrives as from a standing start, t_f = (sqrt(v^2 + 2 a_f x) - v) / a_f with SUMO's
-default passenger acceleration a_f = 2.6 m/s^2. (At unsignalised links the same rule held the ego
-at roundabout entries for ring cars slowing near the entry, and roundabout2 seeds 7 and 8 ran out
-of time; it is not applied there.) With x / max(v, 1 m/s) the car standing
-opposite an ego turning left on a permissive green "arrived" in 5.4 s as the light turned green;
-it set off with the ego and they met in the junction (netgenerate rand06, light 24, seeds 2 and 3).
+default passenger acceleration a_f = 2.6 m/s^2: at constant speed (x / max(v, 1 m/s)) a car
+standing at its line as its light turns green counts as arriving seconds later than it does. The
+rule is not applied at unsignalised links, where it would hold the ego at a roundabout entry for
+ring cars slowing near the entry.
 
 An **all-way stop** ('w') is first come, first served (:func:`waits_its_turn`). A foe still on its
 way to its stop line that can stop before the conflict point (v^2 / (2 * 4.5 m/s^2) <= x, SUMO's
@@ -29,10 +28,9 @@ default deceleration) will stop there first: no foe yet. A foe standing more tha
 behind its line is queued: no foe. A foe standing at its line (slower than ``STAND_MPS``) since
 after the ego first stood at its own waits its turn: no foe. Every other foe (standing there since
 before the ego, setting off from its line within ``DEPART_S``, inside the junction) goes first and
-arrives as from a standing start (above). With the constant-speed rule a car standing at its line 8 m
-from the conflict point "arrived" in 8 s, the ego went, the car went too, and the two met inside
-the junction (grid08 seed 2); yielding to every standing car instead left the ego and SUMO's cars
-waiting for each other for 100 s (grid08 seed 1: SUMO, too, had the ego first).
+arrives as from a standing start (above): at constant speed a car standing at its line counts
+as arriving late and sets off with the ego, while yielding to every standing car leaves the ego and
+SUMO's cars (which give the ego its turn) waiting for each other.
 """
 from __future__ import annotations
 
