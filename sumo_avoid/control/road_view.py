@@ -44,9 +44,9 @@ DROP_BACK_MPS = 2.0
 LANE_FREE_S = 1.0
 COMMIT_M = 0.5
 #: Changes are held only where the lane the ego needs runs straighter than this radius where the
-#: lane it is in tapers off, m. On a roundabout's ring (R ~ 31 m, edges of ~25 m between arms)
-#: holding the inner lane while braking for ring cars swung the car 0.2 m over the kerb (roundabout2
-#: seeds 4, 5); there the path blends across as before and the field keeps it off the ring's cars.
+#: lane it is in tapers off, m. On a roundabout's ring holding the inner lane while braking for ring
+#: cars swings the car over the kerb; there the path blends across and the field keeps it off the
+#: ring's cars.
 HOLD_RADIUS_M = 100.0
 #: Window of the ego's own projection around its last arc length, m.
 TRACK_WINDOW_M = 30.0
@@ -91,7 +91,7 @@ class RoadView:
             xy = self.frame.to_xy(self.line.s, self.line.d)
             # curvature smoothed over 1 m, not 5: the line's swing out before a tight turn is a few metres
             # long; counted only along the line's stretches (elsewhere the lane frame's 5 m smoothing
-            # holds: a polyline kink read over 1 m asked a car on a ramp to crawl at 3.6 m/s)
+            # holds: over 1 m a polyline kink reads as a tight bend)
             arc = arc_lengths(xy)
             frame = RouteFrame.from_polyline(xy, smooth_m=1.0)
             g = frame.grid_s0_m + frame.grid_step_m * np.arange(len(frame.kappa_grid))
@@ -125,8 +125,8 @@ class RoadView:
         off = self.line.offset(s)
         lo, hi = lo - off, hi - off
         # where the line swings close to a bound (by plan, to make a tight turn), the bound leaves the
-        # car on the line room to spare: its push had held the car off the line, inwards at a turn's
-        # wide entry (rand08: 1.5 m off, then out against the oncoming lane at the exit)
+        # car on the line room to spare: else its push holds the car off the line, inwards at a turn's
+        # wide entry, and the car comes out against the oncoming lane at the exit
         wide = np.abs(off) > 1e-9
         return np.where(wide, np.minimum(lo, -self._room), lo), np.where(wide, np.maximum(hi, self._room), hi)
 
@@ -146,8 +146,8 @@ class RoadView:
         from ahead or alongside (``DROP_BACK_MPS`` below its speed: riding beside it, the gap never
         opens), and, at ``decel_mps2``, stops before its lane tapers off
         (:meth:`~sumo_avoid.road.route_lanes.RouteLanes.lanes_end_s`) to wait there for the gap. A held
-        change goes once the lane has been free for ``LANE_FREE_S`` (on a two-lane roundabout the
-        hold flipped on and off as ring cars came and went); one under way (the ego ``COMMIT_M``
+        change goes once the lane has been free for ``LANE_FREE_S`` (so that the hold does not flip
+        on and off as cars come and go, e.g. on a two-lane roundabout's ring); one under way (the ego ``COMMIT_M``
         towards the lane) is carried through unless a car is alongside in it. In a bend tighter than
         ``HOLD_RADIUS_M`` the path's blend is followed as it is."""
         if self.lanes is None:
@@ -163,7 +163,7 @@ class RoadView:
             return 0.0, np.inf
         end = self.lanes.lanes_end_s(sc.s)
         if np.abs(self.frame.curvature_at(np.linspace(end - 5.0, end, 6))).max() > 1.0 / HOLD_RADIUS_M:
-            self._held_free_s = None  # in a bend (a roundabout's ring): the path's own blend, as before
+            self._held_free_s = None  # in a bend (a roundabout's ring): the path's own blend
             return 0.0, np.inf
         step = 1 if piece.lane > own else -1
         nxt = own + step
@@ -218,8 +218,8 @@ class RoadView:
             o_rel = wrap_angle(o_hd - self.frame.heading_at(os_))
             # a vehicle wholly outside the ego's lanes (oncoming traffic beyond the centre line,
             # a car on a road nearby) is behind a bound the ego keeps to: not an obstacle to it; on a
-            # drivable line's stretch the bound is the line's room (a car standing at the end of the
-            # oncoming lane beside a wide exit was left out and hit: rand08 seed 4)
+            # drivable line's stretch the bound is the line's room (so a car standing at the end of the
+            # oncoming lane beside a wide exit is not left out)
             half = 0.5 * (np.abs(np.sin(o_rel)) * o_len + np.abs(np.cos(o_rel)) * o_wid)
             lo, hi = self.lanes.corridor(os_) if self.lanes is not None else self.corridor(os_)
             off = self.line.offset(os_)  # where the drivable line swings out, so does the room the car may use

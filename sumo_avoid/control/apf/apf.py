@@ -15,10 +15,9 @@ field, and the command is mapped back to the plane. Per ego and step:
   bound at that corner's s, always pushing inwards) (:class:`~sumo_avoid.road.route_lanes.RouteLanes`: the road edge, a two-way road's
   centre line, inside a junction the internal lane of the route, where lanes end). For the bounds
   the footprint is taken as aligned with the road, so that their push depends on where the car
-  is, not on its heading: measured from the real corners, a heading error moved a front corner
-  towards one bound, its push turned the car towards the other, and on a 3.2 m lane an ego kept
-  weaving from bound to bound at the 35 deg course limit after a roundabout (measured: 8.1 m/s of
-  10 along a straight exit, heading swinging +-0.15 rad with no decay).
+  is, not on its heading: measured from the real corners, a heading error moves a front corner
+  towards one bound, its push turns the car towards the other, and on a narrow lane the car weaves
+  from bound to bound.
 * **Influence distance from speed and braking**: ``rho0 = rho0_min + max(cos(phi), 0) *
   (v_close^2 / (2 b) + t_h |v|)`` with ``phi`` the bearing of the obstacle from the heading and
   ``v_close`` the closing speed: an obstacle ahead is felt from the stopping distance, one beside
@@ -192,8 +191,6 @@ class ApfDriver:
             # its influence distance is the clearance kept beside a car plus the lateral stopping
             # distance of its closing speed: the ego's own speed (the headway term, for following)
             # does not count, so a lane-centred car in the next lane does not push the ego at all
-            # (at 2 m and 0.8 s headway a car in the next lane pushed an ego at 20 m/s from 13 m away;
-            # ramp_main seed 1: it drifted 1.15 m towards the merging lane and was side-swiped)
             rho0 = np.where(beside, p.rho0_beside_m + lat_closing**2 / (2 * p.rho0_decel_mps2),
                             p.rho0_min_m + cos_phi * (closing**2 / (2 * p.rho0_decel_mps2)
                                                       + p.rho0_headway_s * np.hypot(*v_ego)))
@@ -226,9 +223,8 @@ class ApfDriver:
         sideways shift (<= ``gov_margin_m``) that keeps it in its lanes and that it can make before
         reaching it (shift <= gap ahead x tan(max_course)).
         Such a vehicle is passed at a crawl while its push widens the gap: a car waiting at the
-        oncoming lane's stop line with its nose turned in, 0.55 m ahead of the ego's corner and 0.14 m
-        to its side, had stopped the ego for good inside a junction while it waited for the ego
-        (netgenerate spider net with randomTrips traffic)."""
+        oncoming lane's stop line with its nose turned in, just ahead of the ego's corner and to its
+        side, would otherwise stop the ego for good inside a junction while it waits for the ego."""
         p, C, O, L = self.p, len(q_cand), len(sc.o_pos), sc.length
         qs, qd = np.repeat(q_cand[:, 0], O), np.repeat(q_cand[:, 1], O)
         e_lo, e_hi = qd - 0.5 * sc.width, qd + 0.5 * sc.width

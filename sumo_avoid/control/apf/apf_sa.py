@@ -118,8 +118,8 @@ class ApfSaController(BaseController):
         out = np.zeros((len(obs.ego_ids), 2))
         f_max = a.k_att * a.d_att_m
         t = obs.snapshot.time_s
-        # backing up needs a view behind: ground truth, or a rear radar (a front radar alone backed the
-        # ego into the cars behind it on an unseen netgenerate grid, 12 collisions on 2 seeds)
+        # backing up needs a view behind: ground truth, or a rear radar (a front radar alone does not
+        # see the cars behind)
         sees_behind = obs.detections is None or any(d.mount == "rear" for d in obs.detections)
         for k, (vid, row) in enumerate(zip(obs.ego_ids, obs.ego_rows)):
             task, st, view = self.tasks[vid], self.state[vid], drv.views[vid]
@@ -171,9 +171,8 @@ class ApfSaController(BaseController):
 
         The centre of the nearest lane that is as free ahead of the end point as the search
         demanded (``sa_free_ahead_m``; SPEC §5: the ego keeps to the centre of the lane it chose:
-        an end point between lanes had the ego pass a car 0.48 m apart on overtaking; the nearest
-        centre regardless of what stands in that lane sent it back behind the wall on
-        local_minimum), else the end point's own offset, shrunk until the shifted carrot keeps the
+        from an end point between lanes the ego passes a car too closely on overtaking; the nearest
+        centre regardless of what stands in that lane can send it back behind the obstacle), else the end point's own offset, shrunk until the shifted carrot keeps the
         car inside its lanes with ``escape_margin_m`` to spare on each side (a target on the kerb
         is no target)."""
         offset = float(end[1])
@@ -237,8 +236,7 @@ class ApfSaController(BaseController):
         """May the ego back up? No vehicle in its road-aligned strip behind it nearer, bumper to
         bumper, than ``reverse_clear_m`` + ``reverse_clear_s`` x the speed at which the two close
         (the ego backing at ``escape_reverse_speed_mps``, the other driving on: SUMO's drivers do not
-        expect a car to come back at them; on a netgenerate grid with randomTrips traffic an ego
-        backed up 50 m of a three-lane road into the cars queueing behind it, 8 collisions)."""
+        expect a car to come back at them)."""
         if not len(sc.o_pos):
             return True
         x, in_strip = self._strip(sc, sc.q, 0.0)

@@ -1,4 +1,4 @@
-"""Flocking on roads (issue 14 item 9): SPEC §1's terms computed in each ego's route frame (SPEC §5).
+"""Flocking on roads: SPEC §1's terms computed in each ego's route frame (SPEC §5).
 
 On a road scenario (no ``[arena]``) every flock member gets its own route frame
 (:class:`~sumo_avoid.control.road_view.RoadView`: s along its route's reference path, d across it,

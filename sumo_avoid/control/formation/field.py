@@ -66,7 +66,7 @@ def bridges(polys: np.ndarray, passage_m: float) -> tuple[np.ndarray, np.ndarray
     less than ``passage_m`` apart, the convex hull of the two. The safety shield keeps a member's
     disc (its half diagonal r) ``margin`` from every obstacle, so a gap narrower than 2 (r + margin)
     is shut to it; the field, which measures from the footprint, would still lead a member into it,
-    where the shield holds it for good (arena seeds 46, 48). Returns (hulls (B, H, 2) CCW, padded,
+    where the shield holds it for good. Returns (hulls (B, H, 2) CCW, padded,
     pairs (B, 2) the indices i < j they join)."""
     polys = np.asarray(polys, float)
     if len(polys) < 2:

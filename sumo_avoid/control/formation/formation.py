@@ -325,7 +325,7 @@ class FormationController(BaseController):
         cruise = p.leader_speed_mps * np.minimum(1.0, rho_g / p.slow_radius_m)
         field_v = unit_norm(field)[0] * cruise[:, None]
         if lk is None:  # the leader is done: each follower drives the field to its own goal, reshaped in the
-            # frame of the way to it (see the followers' reshaping below; arena seed 35)
+            # frame of the way to it (see the followers' reshaping below)
             to_goal = goals - own_pos
             f = ff.attraction(own_pos, goals, p.eta_at) + ff.reshape(rep, np.arctan2(to_goal[:, 1], to_goal[:, 0]),
                                                                      p.alpha, p.beta)
@@ -359,8 +359,8 @@ class FormationController(BaseController):
         out[lk] = forward_cone(field_v[lk] * wait, heading[lk], np.radians(p.max_turn_deg))
         gain = p.k_slot_broken_ps if self.kappa == 3 else p.k_slot_ps
         # a follower's reshaping frame is the way its slot pulls it, not its heading: a slow member's heading
-        # swings with every command (relaxation actuator), and the beta push with it, which held
-        # followers in pockets between obstacles for good (arena seeds 13, 16, 35, 46)
+        # swings with every command (relaxation actuator), and the beta push with it, which can hold
+        # followers in pockets between obstacles for good
         pull = nb_vel[lk] + gain * err
         v = pull + ff.reshape(rep, np.arctan2(pull[:, 1], pull[:, 0]), p.alpha, p.beta) + member
         v = v * np.minimum(1.0, p.follower_max_speed_mps / np.maximum(np.hypot(*v.T), 1e-9))[:, None]

@@ -44,8 +44,8 @@ from sumo_avoid.sensing.perception import ASSUMED_WIDTH_M, perceived_boxes
 
 #: A radar return's assumed box (sensing.perception: car-sized, the return on its near side) is in a
 #: lane when it overlaps it by more than this, its half width (core.gaps.LANE_OVERLAP_M for true
-#: footprints): a car-sized box stands for a vehicle of unknown width (when the box was pushed back
-#: along the line of sight, a truck's reached 0.4 m into the next lane and blocked two lanes).
+#: footprints): a car-sized box stands for a vehicle of unknown width (a box pushed back along the
+#: line of sight, e.g. a truck's, can reach into the next lane and block two lanes).
 RADAR_OVERLAP_M = 0.5 * ASSUMED_WIDTH_M
 #: A lane whose edges the carriageway's bounds cut by more than this is closed, m.
 BOUND_TOL_M = 0.3

@@ -95,8 +95,7 @@ def barrier(v, n, bound, passes: int = 20, slide: float = 0.0) -> np.ndarray:
     turned 90 deg to the left (the hazard's tangent; no change to that constraint), so a command
     straight into a hazard slides round it instead of stopping dead (a follower whose slot lies
     behind an obstacle), but only where that keeps every constraint (between two hazards sliding
-    along one drives into the other: sliding within the passes took a member wedged between two
-    obstacles to a standstill for good, arena seed 46). Returns (E, 2)."""
+    along one drives into the other). Returns (E, 2)."""
     v = np.array(v, float).reshape(-1, 2)
     if n.shape[1] == 0:
         return v

@@ -279,8 +279,8 @@ class GaPlannerController(BaseController):
         sd, idx = in_frame(xy, st.pos, view.frame, s0, s_end, p.road_horizon_m + 20.0)
         static = whole_lanes(sd, ranges[idx], st.task.lanes, s0, p.road_lane_tol_m, p.road_lane_tol_per_m,
                              p.shadow_depth_m, p.shadow_step_m)
-        # at least half its cruise speed: a car waiting for a gap accelerates into it (planned at 1 m/s,
-        # every car within 20 s behind blocked the next lane beside it, and the gap never came)
+        # at least half its cruise speed: a car waiting for a gap accelerates into it (planned at a crawl,
+        # the cars coming up behind block the next lane beside it, and the gap never comes)
         v_plan = max(float(sc.vel[0]), 0.5 * st.task.cruise_speed_mps)
         ahead = meeting_points(sc.o_pos[moving], sc.o_vel[moving], sc.o_length[moving], sc.o_width[moving], s0, d0,
                                v_plan, sc.length, p.road_follow_gap_m, s_end + 10.0, 1.0, 0.5 * sc.width + 0.6,
