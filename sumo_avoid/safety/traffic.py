@@ -28,12 +28,8 @@ Per ego and step, with s the arc length of the ego's front bumper projected on i
 * **Speed for the road ahead.** v <= sqrt(v_i^2 + 2 b_comf (s_i - s)) for every lane piece i
   starting within ``lookahead_m`` at s_i with speed limit v_i x ``speed_factor`` (SUMO's
   speedFactor idea; junction internal lanes carry netconvert's turning speeds). Off by default
-  (``speed_factor`` unset) for now: on left_turn, seed 1, the 9.55 m/s cap in the junction
-  shifts APF-SA's timing by a fraction of a second and the ego then stalls for good beside the
-  centre line of C2W after being passed (measured: goal not reached in 90 s; reached at 38 s
-  without the cap). That stall is the controller's (issue "drive any SUMO network"), and the cap
-  becomes the default with the road-frame controllers. The curvature speed sqrt(a_lat / |kappa|)
-  joins this envelope with the route frame (not yet wired).
+  (``speed_factor`` unset): a cap in a junction shifts a controller's timing there, which can
+  leave APF-SA stalled after being passed.
 
 The command (desired velocity, m/s) keeps its direction; only its length is capped. The stop
 line works as a virtual obstacle that no controller can drive through; SPEC §5 hands it to the
@@ -150,8 +146,8 @@ class TrafficRulesLayer:
                 e.yellow.pop(k, None)
             if c == "y" and k not in e.yellow:
                 # the law's test, the metric's: a comfortable stop before the line itself (d is to
-                # the stop position, stop_margin_m before it; deciding on d went on through yellows
-                # the metric judged stoppable by up to 1 m: grid_actuated seeds 3 and 9)
+                # the stop position, stop_margin_m before it; deciding on d would go on through yellows
+                # the metric judges stoppable)
                 e.yellow[k] = STOP if v * v / (2.0 * p.comfort_decel_mps2) <= d + p.stop_margin_m else GO
             if c in RED or e.yellow.get(k) == STOP:
                 here = math.sqrt(2.0 * p.comfort_decel_mps2 * max(d, 0.0))

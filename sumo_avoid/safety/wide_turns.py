@@ -3,8 +3,8 @@
 Where a junction's turn is tighter than the car's turning circle, the car drives the drivable line
 (:mod:`sumo_avoid.road.drivable`): wide before the turn, across the apex, and wide again at the
 exit, where it may come within a few decimetres of the centre line, or past it. A car following that
-line strays from it by up to ``TRACK_ERROR_M`` at the exit (rand08, 130 deg right turn at a 4.25 m
-turning radius: 0.49 m), and its corner then sweeps the lane of the oncoming traffic. A driver of a
+line strays from it by up to ``TRACK_ERROR_M`` at the exit, and its corner then sweeps the lane of the
+oncoming traffic. A driver of a
 long vehicle waits at the line until that lane is clear; so does the ego.
 
 For a link whose exit edge has an oncoming lane beside it (``RouteLink.oncoming``), the *wide exit*
@@ -15,24 +15,21 @@ corner reaches s_w + L/2 (L its length), so the conflict point on the oncoming l
 e = s_w + L/2 - s_exit before that lane's end (its stop line), and the ego has cleared the wide exit
 when its front is at s_clear = s_w + L. An oncoming vehicle x metres before the conflict point at
 speed v arrives in max(x, 0) / max(v, 1 m/s) (:func:`~sumo_avoid.road.yielding.arrival_time`;
-past that point it is in the ego's sweep until it has left its lane: rand08 seed 4, a car braking
-to the end of that lane was hit when counted only until its rear had passed the point). A car that
-*stands* past the point waits for the junction. Where one of its lane's links gives way to the
-ego's (SUMO's junction logic), it may be waiting for the ego itself: waiting for it deadlocked both
-(rand08 seed 4, 90 s); it is not waited for, and the ego's road view keeps it an obstacle to steer
-clear of (control/road_view.py: a vehicle within the room of the drivable line is in the scene).
-Where none gives way to the ego's link, it waits for others and stays in the sweep: the ego waits
-too (rand08 seed 4: entering beside such a car, the ego stood 27 s inside the turn 0.8 m from its
-nose, and four cars queueing behind the ego ran into it). The ego,
-its front at s, clears in (s_clear - s) / ``TURN_CRAWL_MPS``, the speed it makes such turns at
-(rand08: it crosses the line at 3.2 m/s and slows to 2.1 m/s at the apex; it took 6 s from the line
-to s_w, 14 m). Before its stop line the ego is held while an oncoming vehicle arrives before it has
-cleared, plus the rules' gap margin (rules.py), and while a car from the oncoming lane is still in
-the junction (on the internal lanes its connections run over): it turns or passes next to the ego's
-wide entry (tests/data/tight_turn at 130 deg: released as the oncoming car's rear had passed the
-conflict point, the ego met it turning left in the junction, gap 0.10 m), or has left it by less
-than ``LEAVING_CLEAR_M`` on the lane beside the ego's entry (released as that car left the
-junction, the ego's wide entry closed on it to 0.04 m).
+past that point it is in the ego's sweep until it has left its lane, not only until its rear has
+passed the point: a car braking to the end of that lane stays in the sweep). A car that *stands*
+past the point waits for the junction. Where one of its lane's links gives way to the ego's
+(SUMO's junction logic), it may be waiting for the ego itself: waiting for it would deadlock both;
+it is not waited for, and the ego's road view keeps it an obstacle to steer clear of
+(control/road_view.py: a vehicle within the room of the drivable line is in the scene). Where none
+gives way to the ego's link, it waits for others and stays in the sweep: the ego waits too
+(entering beside such a car, the ego would stand inside the turn next to it, with the traffic
+behind the ego queueing into the junction). The ego, its front at s, clears in
+(s_clear - s) / ``TURN_CRAWL_MPS``, the speed it makes such turns at. Before its stop line the ego
+is held while an oncoming vehicle arrives before it has cleared, plus the rules' gap margin
+(rules.py), and while a car from the oncoming lane is still in the junction (on the internal lanes
+its connections run over): it turns or passes next to the ego's wide entry, or has left it by less
+than ``LEAVING_CLEAR_M`` on the lane beside the ego's entry (the wide entry closes on such a car
+until it is that far away).
 
 The wide *entry* before the stop line keeps to the ego's lane (the line's lane bounds); a car that
 passes it on the opposite lane is not waited for.
@@ -49,9 +46,9 @@ from sumo_avoid.road.route_lanes import RouteLanes
 from sumo_avoid.core.types import EgoTask
 from sumo_avoid.road.yielding import STAND_MPS, arrival_time
 
-#: A car may stray this far from its drivable line in a tight turn (rand08: 0.49 m), m.
+#: A car may stray this far from its drivable line in a tight turn, m.
 TRACK_ERROR_M = 0.5
-#: A car makes a turn too tight for it at about this speed (rand08: 2.1-3.2 m/s, 2.3 m/s on average), m/s.
+#: A car makes a turn too tight for it at about this speed, m/s.
 TURN_CRAWL_MPS = 2.0
 #: The wide exit is looked for from this far before the exit edge, m.
 BEFORE_EXIT_M = 2.0
