@@ -6,8 +6,8 @@ controller that expects footprints gets, per detection, an assumed car-sized box
 boresight) with the reflection point on its near side: the middle of its rear face for a car
 straight ahead, of its side for a car beside, its corner for a car ahead in the next lane
 (:func:`perceived_boxes`), moving with the ego's velocity plus the measured radial speed explained by
-motion along the ego's heading (:func:`velocity_estimate`). Before, the box was pushed back along the
-line of sight, which for a corner return put it 0.6 m too far into the next lane.
+motion along the ego's heading (:func:`velocity_estimate`). A box pushed back along the line of
+sight instead would put a corner return's car too far into the next lane.
 """
 from __future__ import annotations
 

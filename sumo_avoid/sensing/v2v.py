@@ -3,8 +3,8 @@ receives from the others, with communication delay, Gaussian noise and the drift
 
 The controller calls :meth:`V2VLink.states` when it updates (every ``update_period_s``): the link
 keeps the messages of the last ``delay_s`` and hands out the ones sent ``delay_s`` ago. The noise
-draws come from the link's own random stream in the same order as before the sensing moved here
-(GPS walk, then own position, own velocity, neighbours' positions, neighbours' velocities).
+draws come from the link's own random stream in a fixed order (GPS walk, then own position, own
+velocity, neighbours' positions, neighbours' velocities).
 """
 from __future__ import annotations
 
