@@ -11,8 +11,8 @@ encounters end and completes it when the simulation closes. Nothing here imports
 
 How the egos are equipped: not with ``--device.ssm.explicit``. SUMO reads that list once per
 process (``MSDevice::myExplicitIDs`` is static and never cleared): in a process that runs several
-simulations through libsumo (tests, benchmarks, ``reproduce``), every later run kept the first
-run's list (measured: after a run with egos flock0..9, a run with ego "ego" logged no conflict).
+simulations through libsumo (tests, benchmarks, ``reproduce``), every later run keeps the first
+run's list.
 Instead each ego's definition gets the per-vehicle parameter ``has.ssm.device = true``: the route
 and additional files that define an ego are copied, so changed, into the run's temporary folder
 (:func:`equip`), the others are passed as they are.
