@@ -6,7 +6,7 @@ recorded speeds s_k (m/s); an interval is two consecutive rows of the same ego w
 
 * Longitudinal speed on interval k: v_{k+1/2} = (p_{k+1} - p_k) · ū / (t_{k+1} - t_k), ū the unit
   mean of the two headings: the displacement along the car, signed (backwards < 0). Positions, not
-  the ``speed`` column: SUMO reports a reversing ego's speed as positive (measured), and |v| through
+  the ``speed`` column: SUMO reports a reversing ego's speed as positive, and |v| through
   a reversal would look like a jerk spike.
 * Acceleration at row k: a_k = (v_{k+1/2} - v_{k-1/2}) / ((t_{k+1} - t_{k-1}) / 2).
 * Jerk on interval k: j_{k+1/2} = (a_{k+1} - a_k) / (t_{k+1} - t_k); at a constant step dt this is

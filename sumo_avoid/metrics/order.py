@@ -21,7 +21,7 @@ How it is computed, all steps at once (no loop over steps except where a step's 
   cells are equal or 8-neighbours are < 2√2/3 r_c ≈ 0.94 r_c apart, so they are linked in the r_c
   graph; the 8-connected blobs of occupied cells ("groups") therefore each lie inside one cluster.
   A step with a single group is a single cluster (the usual case of a flock). Only for the steps
-  with several groups are the r_c pairs listed (the step's own cKDTree, as before) and the groups
+  with several groups are the r_c pairs listed (the step's own cKDTree) and the groups
   they join merged; one ``connected_components`` over the groups of the whole run gives the
   clusters. The result is the connected components of the r_c graph, exactly.
 * Nearest neighbour: every distance of each step (:func:`_nearest_dense`), a few steps at a time,
@@ -33,7 +33,7 @@ How it is computed, all steps at once (no loop over steps except where a step's 
   nearest neighbour is that close, so only those are searched (a cKDTree of them, stacked so).
 * Per-step and per-cluster sums with ``np.bincount`` over the (step, id)-sorted rows, which adds in
   row order whatever the labels: with the same clusters and distances, the same floats as the
-  former loop over steps (tests/metrics/test_order.py keeps it as the reference).
+  loop over steps (tests/metrics/test_order.py keeps one as the reference).
 """
 from __future__ import annotations
 

@@ -14,11 +14,11 @@ The search radius is widened slightly (:data:`WIDEN`, :data:`SLACK_M`) and is at
 first round of the smallest gap and φ_coll's 3 m), and the widest search so far is kept and
 reused for smaller radii: the pairs returned are a superset of those within the radius, one search
 serves the three metrics when they share a :class:`Rows`, and each metric then applies its own
-exact test to the distances it computes itself (``np.hypot`` of the coordinate differences, as
-before), so the results do not depend on the tree's rounding or on which pairs beyond the radius
+exact test to the distances it computes itself (``np.hypot`` of the coordinate
+differences), so the results do not depend on the tree's rounding or on which pairs beyond the radius
 came along.
 
-Orientation, as the former enumeration over rows sorted by (step, id): ``i`` is the ego of an
+Orientation, as in an enumeration over rows sorted by (step, id): ``i`` is the ego of an
 ego/non-ego pair, and of two egos the one that comes first in that order (the smaller id).
 """
 from __future__ import annotations

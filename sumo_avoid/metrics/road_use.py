@@ -9,8 +9,8 @@ whose length (m) counts wholly when its midpoint qualifies, with the heading of 
   that lane's direction there (:meth:`sumo_avoid.road.lane_index.LaneIndex.against`): it faces the
   lane's traffic (a ghost driver), whichever way it moves. None in an arena (its roads only give
   SUMO lanes to map the flock onto). Documented choice: backing up in one's own lane faces the
-  lane's direction and is not wrong-way driving (it is ``reverse_m``); it used to count here,
-  which made an escape manoeuvre look like driving against traffic.
+  lane's direction and is not wrong-way driving (it is ``reverse_m``): counted here, an escape
+  manoeuvre would look like driving against traffic.
 * ``reverse_m``: the motion is more than 90° from the heading (backing up), anywhere.
 * ``off_road_m``: the midpoint is outside the drivable area of the ego's vehicle class
   (``Road.outside_distance`` > 0; the lanes open to it, internal ones included, and junction shapes),
