@@ -35,9 +35,8 @@ _IMPORTED = time.time()
 
 def exit_now(rc: int) -> None:
     """Flush stdio and exit without the interpreter's teardown: nothing in it is needed once
-    result.json is written, and in a spawned worker it took 0.40 s (median, benchmarks/batch.py on
-    a loaded 2-core machine) of freeing pandas, numpy, libsumo...; 0.05 s from result to reaped
-    with this."""
+    result.json is written, and freeing pandas, numpy, libsumo... is most of a child's time from
+    its result to being reaped."""
     for stream in (sys.stdout, sys.stderr):
         try:
             stream.flush()

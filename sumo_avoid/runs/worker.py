@@ -10,8 +10,8 @@ aborts or hangs costs only itself. Three ways to start that process (``start``),
   plug-in once, then forks a fresh child per run. The server never runs a simulation itself, so
   every child starts from the same clean, freshly imported state; a child that crashes takes
   nothing with it. The server enforces the run's timeout (``pidfd``, race-free kill) and reports
-  the child's exit status. This removes the ~0.6 s of interpreter start and imports from every
-  run (measured: ``benchmarks/batch.py``).
+  the child's exit status. This removes the interpreter start and imports from every run
+  (``benchmarks/batch.py`` measures it).
 * ``"spawn"``: a fresh ``python -m sumo_avoid.runs.child MESSAGE`` interpreter per run (the only way on
   systems without ``fork``/``pidfd``).
 * ``"here"``: a child forked from the calling process itself, which must be single-threaded and
