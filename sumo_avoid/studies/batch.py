@@ -111,8 +111,8 @@ def plan(scenario_path, seed: int, overrides=(), controller=None) -> RunSpec:
     h = hashlib.sha256(KEY_VERSION)
     for f in (path, scn.net_file, *scn.route_files, *scn.additional_files):
         h.update(_file_digest(f))
-    # "inject_crash": None keeps every key exactly what it was when test-only crash injection was part
-    # of the run (the ledgers in reports/ are keyed by it); injection now lives outside the key (runs/faults.py)
+    # "inject_crash": None is part of every key, so that keys match those of the ledgers in reports/;
+    # test-only crash injection itself lives outside the key (runs/faults.py)
     h.update(json.dumps({"overrides": list(overrides), "controller": scn.spec.ego.controller,
                          "seed": scn.spec.sim.seed, "inject_crash": None}, sort_keys=True).encode())
     return RunSpec(str(path), scn.spec.sim.seed, tuple(overrides), controller, h.hexdigest(),
