@@ -28,8 +28,8 @@ import numpy as np
 from sumo_avoid.road.route import LanePiece
 
 #: Waypoints are kept this much further inside the lanes than the lane bounds' points require: a
-#: segment between two waypoints at the margin passed the bound's points at 1.51 m instead of 1.6 m
-#: where the corridor kinks (lane pieces joining), and no path was usable.
+#: segment between two waypoints at the margin passes closer to the bound's points where the
+#: corridor kinks (lane pieces joining), and would make no path usable.
 CLIP_SLACK_M = 0.2
 
 
@@ -84,13 +84,13 @@ def whole_lanes(points, ranges, pieces: tuple[LanePiece, ...], s_ego: float, tol
     (the radar's azimuth steps: 1 deg is 1.2 m at 70 m). One that lies clearly inside a lane
     (farther than tol from its lines) becomes three points, the right bound, the centre and the
     left bound of that lane (a standing object in a lane blocks the lane: the radar reports only an
-    object's nearest point, and 2.7 m of debris seen head-on gave one point; a path that kept the
-    safety radius from it ran into the rest). One within tol of a lane line is put on that line:
-    an object's edge there, on one side or the other (debris seen from 70 m read 0.4-0.8 m into
-    both neighbouring lanes). Each resulting point also marks the object's body beyond it, along
-    the lane away from the ego (``shadow_depth_m`` deep, a point every ``shadow_step_m``): a
-    standing object on a road lies along its lane, not along the line of sight (seen across a
-    bend, the line of sight put the shadow of debris in the next lane). Lane centres and widths
+    object's nearest point, and a path that keeps the safety radius from that point alone runs into
+    the rest of the object). One within tol of a lane line is put on that line: an object's edge
+    there, on one side or the other (at long range a point can read well into either neighbouring
+    lane). Each resulting point also marks the object's body beyond it, along the lane away from
+    the ego (``shadow_depth_m`` deep, a point every ``shadow_step_m``): a standing object on a road
+    lies along its lane, not along the line of sight (across a bend, a shadow along the line of
+    sight would fall in the next lane). Lane centres and widths
     from the edge at the point's s. Returns (M, 2)."""
     pts = np.asarray(points, float).reshape(-1, 2)
     rng = np.broadcast_to(np.asarray(ranges, float), (len(pts),))

@@ -140,8 +140,7 @@ def violation(pop, points, radius_m: float, first_radius_m: float, presorted: bo
     others ``radius_m``. (The ego may already be closer than the safety radius to a point it has
     just discovered; every path starts there, so the first segment asks only that the ego not get
     closer.) The sum, not the worst segment: a path that clears one of several obstacles it crosses
-    ranks better, so the GA can repair a path piece by piece (with the worst segment alone it
-    made no progress where a path crossed several obstacles). ``presorted``: ``points`` come from
+    ranks better, so the GA can repair a path piece by piece. ``presorted``: ``points`` come from
     :func:`sorted_points`."""
     pts = points if presorted else sorted_points(points)
     c1, c2 = _clearances(pop, pts)
@@ -249,7 +248,7 @@ def free_space_paths(start, goal, k: int, n: int, points, p: GaParams, rng: np.r
     without a free v2 goes straight on from v1; fewer than ``k`` paths when fewer v1 are free.
     ``points`` from :func:`sorted_points`. (Perturbing the straight start-goal line never finds a
     way out that begins away from the goal: down the channel the ego stands in, back round an
-    obstacle; seen on field seed 16.)"""
+    obstacle.)"""
     start, goal = np.asarray(start, float), np.asarray(goal, float)
     r, reach = p.safety_radius_m, max(p.free_init_reach_m, p.safety_radius_m)
 
