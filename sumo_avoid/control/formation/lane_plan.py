@@ -213,7 +213,7 @@ class LaneFormation:
     def _beside(self, obs: Observation, vid: str, sc, view, known):
         """What member ``vid`` knows of the lanes beside it for a lane change, in its frame: (pos (s, d),
         length, width, speed along the road). Ground truth: its scene. Radar: a front radar does not see
-        a car alongside (a member changed lanes 0.06 m from one it could not see), so every member's
+        a car alongside, so every member's
         returns are pooled (cooperative perception over V2V: a member behind sees the car beside one
         ahead), minus those within ``v2v_gate_m`` of a member, plus the members themselves (V2V)."""
         ids, xy, vel = known
