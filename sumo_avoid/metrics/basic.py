@@ -69,7 +69,7 @@ def collision_events(traj: pd.DataFrame, rows: Rows | None = None) -> pd.DataFra
     i, j = i[hit], j[hit]
     if i.size == 0:
         return pd.DataFrame(columns=_EVENT_COLS)
-    o = np.lexsort((s.order_pos[j], s.order_pos[i]))  # the former pair order: by ego row, then partner
+    o = np.lexsort((s.order_pos[j], s.order_pos[i]))  # pair order: by ego row, then partner
     i, j = i[o], j[o]
     ids_i, ids_j = s.ids[i].astype(str), s.ids[j].astype(str)
     swap = ids_j < ids_i
