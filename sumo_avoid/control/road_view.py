@@ -147,7 +147,8 @@ class RoadView:
         opens), and, at ``decel_mps2``, stops before its lane tapers off
         (:meth:`~sumo_avoid.road.route_lanes.RouteLanes.lanes_end_s`) to wait there for the gap. A held
         change goes once the lane has been free for ``LANE_FREE_S`` (so that the hold does not flip
-        on and off as cars come and go, e.g. on a two-lane roundabout's ring); one under way (the ego ``COMMIT_M``
+        on and off as cars come and go, e.g. on a two-lane roundabout's ring); one under way (the
+        ego ``COMMIT_M``
         towards the lane) is carried through unless a car is alongside in it. In a bend tighter than
         ``HOLD_RADIUS_M`` the path's blend is followed as it is."""
         if self.lanes is None:

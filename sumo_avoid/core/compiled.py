@@ -2,7 +2,8 @@
 
 They stand in for numba's own np.sort / np.argsort / np.searchsorted, which cost seconds of compile
 time in every kernel that uses them (the radar's first compile takes less than half the CPU time
-without them), and give the same results: a stable sort's permutation is unique, the sorted values do not depend on
+without them), and give the same results: a stable sort's permutation is unique, the sorted values
+do not depend on
 the algorithm (finite values), and a binary search finds numpy's insertion point.
 """
 from __future__ import annotations

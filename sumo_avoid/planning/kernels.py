@@ -2,7 +2,8 @@
 
 The GA evaluates the clearance of N paths x (n-1) segments against P obstacle points every
 generation. Numpy broadcasting over (N, n-1, P, 2) computes every segment against every point;
-this loop does the same arithmetic, on the points near each segment only, in a fraction of the time (tests/planning/test_ga.py checks it against the
+this loop does the same arithmetic, on the points near each segment only, in a fraction of the time
+(tests/planning/test_ga.py checks it against the
 numpy formulation). The smoothing operator, a loop over waypoints, is here too. Compiled on first use
 and cached on disk (``cache=True``), like the radar's kernel.
 """

@@ -4,7 +4,8 @@ where their width allows.
 SUMO draws a junction's internal lanes with radii a car cannot drive: netgenerate's random nets
 turn right at 2.7-4.7 m where a car's centre needs ~5 m (``actuator.min_turn_radius_m``). A car
 that follows the lane centre starts turning when the lane does, turns at its limit and comes out
-wide, facing the traffic of the opposite lane. A driver takes such a turn wide *before* it and cuts in at its apex. This module finds that
+wide, facing the traffic of the opposite lane. A driver takes such a turn wide *before* it and cuts
+in at its apex. This module finds that
 line as a lateral offset d(s) from the route's reference path (the SPEC §5 frame: points
 x_i = P(s_i) + d_i n(s_i) on a grid of spacing h = 0.5 m), by a linear programme over each tight
 stretch (where the path's curvature, smoothed over 3 m, exceeds 1 / (f R_min): a turn, not a kink

@@ -4,8 +4,7 @@ Where a junction's turn is tighter than the car's turning circle, the car drives
 (:mod:`sumo_avoid.road.drivable`): wide before the turn, across the apex, and wide again at the
 exit, where it may come within a few decimetres of the centre line, or past it. A car following that
 line strays from it by up to ``TRACK_ERROR_M`` at the exit, and its corner then sweeps the lane of the
-oncoming traffic. A driver of a
-long vehicle waits at the line until that lane is clear; so does the ego.
+oncoming traffic. A driver of a long vehicle waits at the line until that lane is clear; so does the ego.
 
 For a link whose exit edge has an oncoming lane beside it (``RouteLink.oncoming``), the *wide exit*
 is the stretch from 2 m before the exit edge to ``REACH_M`` past it where the line, widened by the

@@ -172,7 +172,8 @@ class ApfSaController(BaseController):
         The centre of the nearest lane that is as free ahead of the end point as the search
         demanded (``sa_free_ahead_m``; SPEC §5: the ego keeps to the centre of the lane it chose:
         from an end point between lanes the ego passes a car too closely on overtaking; the nearest
-        centre regardless of what stands in that lane can send it back behind the obstacle), else the end point's own offset, shrunk until the shifted carrot keeps the
+        centre regardless of what stands in that lane can send it back behind the obstacle), else
+        the end point's own offset, shrunk until the shifted carrot keeps the
         car inside its lanes with ``escape_margin_m`` to spare on each side (a target on the kerb
         is no target)."""
         offset = float(end[1])

@@ -34,7 +34,8 @@ class ObstacleLists:
         obstacles); ``shared``: every member knows everything (ground truth in the leader's route
         frame on a road). The leader's list is shared with every member (V2V); what a
         follower senses itself (its radar; truth: within ``sense_radius_m`` of it) it adds for itself (a
-        follower far behind the leader is near obstacles the leader has passed). The hulls over gaps too narrow to
+        follower far behind the leader is near obstacles the leader has passed). The hulls over gaps
+        too narrow to
         pass (:meth:`_shut_gaps`) go to the field alone."""
         snap, E = obs.snapshot, len(obs.ego_ids)
         parts, know, vel, shut = [], [], [], []  # know (E, n): which member knows which; shut: a hull

@@ -1,7 +1,8 @@
 """The formation controller's safety shield: a velocity barrier no choice of gains can override.
 
 The potential field (:mod:`.field`) only *prefers* distance from an obstacle: how much
-depends on eta_re / eta_at, and a tuner that is scored on speed learns to weaken the repulsion. The shield is applied to
+depends on eta_re / eta_at, and a tuner that is scored on speed learns to weaken the repulsion. The
+shield is applied to
 every member's velocity command after the field, and keeps for each hazard the discrete-time
 barrier condition (a control-barrier-function constraint on a single integrator)
 
@@ -23,7 +24,8 @@ Two hazard models (see :func:`disc_hazards`, :func:`footprint_hazards`):
   the allowed approach (both run the same shield), so while the velocities follow the commands the
   pair keeps ``-k h`` together: as discs of their half diagonals (``member_disc``; safe at any
   headings: with the relaxation actuator two slow members' headings can swing round within one
-  step, corners into each other, while their centres stay metres apart) or footprint to footprint (a car's yaw rate is bounded; lane-wide slots
+  step, corners into each other, while their centres stay metres apart) or footprint to footprint (a
+  car's yaw rate is bounded; lane-wide slots
   on a road need the footprints: 3.5 m between centres is less than two half diagonals).
 """
 from __future__ import annotations

@@ -36,7 +36,8 @@ class LeaderTrail:
 
     def lost_goals(self, ids, pos, goals, t: float) -> np.ndarray:
         """Goals (E, 2) once the leader is at its goal: a follower that came less than ``lost_progress_m``
-        nearer its own goal within ``lost_window_s`` is caught in a pocket of the field and from then on aims at the point
+        nearer its own goal within ``lost_window_s`` is caught in a pocket of the field and from
+        then on aims at the point
         ``spacing_m`` ahead on the leader's path (a way the leader drove) past the path's point nearest
         it (never behind where it was on the path), until that point would lie beyond the path's end;
         then at its goal again, for good."""
