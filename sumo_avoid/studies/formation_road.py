@@ -1,4 +1,4 @@
-"""The formation's road case over many seeds.
+"""The formation's road case over many seeds (issue: formation control, road case).
 
     python -m sumo_avoid.studies.formation_road --seeds 1-10 --workers 2 --out reports/formation/road \
         [--scenario scenarios/formation/road_closure.toml] [--set KEY=VALUE ...]
