@@ -18,8 +18,9 @@ From the net (static, read once with :mod:`sumolib`, pedestrian connections on):
 From a snapshot (dynamic): a person is *on* the crossing when SUMO has it on the crossing's lane, and
 *about to step onto it* when it is on one of the crossing's two walking areas within
 :data:`KERB_ZONE_M` of the crossing's end and either walks towards the crossing faster than
-:data:`APPROACH_MPS` or stands there (a person waiting at the kerb of a zebra is waiting for the
-traffic to stop).
+:data:`APPROACH_MPS` or, at an unsignalised crossing, stands there (a person waiting at the kerb of a
+zebra waits for the traffic to stop; at a signalised corner, shared by two crossings, a person who
+stands waits for the other crossing's green).
 """
 from __future__ import annotations
 
@@ -125,7 +126,10 @@ def persons_at(crossing: CrossingLink, lane, pos, vel) -> np.ndarray:
         towards /= np.maximum(np.hypot(towards[:, 0], towards[:, 1]), 1e-9)[:, None]
         speed_in = np.einsum("ij,ij->i", vel, towards)
         standing = np.hypot(vel[:, 0], vel[:, 1]) < STAND_MPS
-        on |= near & close & ((speed_in > APPROACH_MPS) | standing)
+        # standing at the kerb: waiting for the traffic to stop at a zebra; at a signalised corner, where two
+        # crossings meet, a person standing waits for the other crossing's green (on its own green it walks)
+        waiting = standing if not crossing.tls else np.zeros(len(pos), bool)
+        on |= near & close & ((speed_in > APPROACH_MPS) | waiting)
     return on
 
 
