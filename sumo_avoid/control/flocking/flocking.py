@@ -26,7 +26,7 @@ Reference-simulator options (SPEC §1.3): the desired velocity is recomputed eve
 ``update_period_s``; neighbours' states can arrive ``delay_s`` late; own and neighbours' positions
 and velocities can carry Gaussian noise and/or the reference simulator's drifting GPS error
 (``gps_sigma_m2ps2``, :mod:`sumo_avoid.core.noise`). The velocity relaxation itself is the actuator's job
-(``ego.actuator = "relaxation"``, :mod:`sumo_avoid.road.walls`).
+(``ego.actuator = "relaxation"``, :mod:`sumo_avoid.actuation.relaxation`).
 """
 from __future__ import annotations
 
