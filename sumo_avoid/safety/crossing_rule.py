@@ -59,33 +59,20 @@ class CrossingRule:
     def cap(self, task, s_front: float, v: float, snap, ego_row: int, ego_length_m: float) -> tuple[float, float]:
         p = self.p
         persons = np.flatnonzero(snap.is_person)
-        crossings = [c for link in task.links for c in link.crossings]
-        for c in crossings:
-            d = c.s_enter_m - s_front
-            if d <= 0.0:
-                continue  # on it or past it: clear it
-            if d > p.lookahead_m:
-                return math.inf, -1.0
-            if v * v / (2.0 * p.commit_decel_mps2) > d:
-                continue  # too late to stop before it: go on over it
-            hold = False
-            if c.gives_way and len(persons) and people_may_cross(c, snap.signals):
-                lanes = [snap.lane[r] for r in persons]
-                hold = bool(persons_at(c, lanes, snap.pos[persons], snap.vel[persons]).any())
-            if hold or not room_beyond(c, task.path, snap, ego_row, ego_length_m + ROOM_M):
-                line = self._wait_line(crossings, c, s_front, ego_length_m)
-                return math.sqrt(2.0 * p.comfort_decel_mps2 * max(line - s_front - p.stop_margin_m, 0.0)), line
+        for link in task.links:
+            for c in link.crossings:
+                d = c.s_enter_m - s_front
+                if d <= 0.0:
+                    continue  # on it or past it: clear it
+                if d > p.lookahead_m:
+                    return math.inf, -1.0
+                if v * v / (2.0 * p.commit_decel_mps2) > d:
+                    continue  # too late to stop before it: go on over it
+                stop = math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0))
+                if c.gives_way and len(persons) and people_may_cross(c, snap.signals):
+                    lanes = [snap.lane[r] for r in persons]
+                    if persons_at(c, lanes, snap.pos[persons], snap.vel[persons]).any():
+                        return stop, c.s_enter_m
+                if not room_beyond(c, task.path, snap, ego_row, ego_length_m + ROOM_M):
+                    return stop, c.s_enter_m
         return math.inf, -1.0
-
-    def _wait_line(self, crossings, c, s_front: float, length_m: float) -> float:
-        """Where the ego waits for crossing ``c``: before it, unless standing there would leave its body
-        on an earlier crossing (the one across the arm it enters by, a car length before a turn's exit
-        crossing): then before that one, if the ego has not reached it yet."""
-        line = c.s_enter_m
-        for other in crossings:
-            if other is c or other.s_enter_m >= c.s_enter_m:
-                continue
-            rear = line - self.p.stop_margin_m - length_m
-            if other.s_exit_m > rear and other.s_enter_m > s_front:
-                line = other.s_enter_m
-        return line
