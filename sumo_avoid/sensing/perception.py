@@ -97,17 +97,7 @@ def obstacle_vehicles(obs, row: int, q, radius_m: float):
     d = np.hypot(*(snap.pos - np.asarray(q, float)).T)
     o = np.flatnonzero((d < radius_m) & (np.arange(snap.n) != row))
     vru = snap.is_person[o] | np.isin(np.asarray(snap.vclass, dtype=object)[o], list(VRU_CLASSES))
-    # a person on a walking area (a corner or the kerb of a crossing) waits or walks off the carriageway:
-    # no margin beyond its size (a car turning at a corner passes the people waiting there)
-    lanes = np.asarray(snap.lane, dtype=object)[o]
-    vru &= ~(snap.is_person[o] & np.array([_walking_area(ln) for ln in lanes], bool).reshape(len(o)))
     return snap.pos[o], snap.heading[o], snap.length[o], snap.width[o], snap.vel[o], vru
-
-
-def _walking_area(lane: str) -> bool:
-    """SUMO's walking areas are internal lanes ``:JUNCTION_wK_0``."""
-    parts = lane.rsplit("_", 2)
-    return lane.startswith(":") and len(parts) == 3 and parts[1][:1] == "w" and parts[1][1:].isdigit()
 
 
 def radar_obstacles(obs, known_pos, gate_m: float):
