@@ -81,50 +81,15 @@ class RoutePlanner:
         pieces: list[np.ndarray] = []
         link_at: list[tuple[object, int]] = []  # (connection, points before its stop line)
         limit_at: list[tuple[float, int]] = []  # (speed limit, points before its lane piece)
-        piece_at: list[tuple] = []  # (edge, lane, offsets at start, offsets at end, widths, points before it)
-        n_points = 0
+        piece_at: list[tuple] = []  # (edge, lane, offsets at start, offsets at end, widths, allowed, points before it)
         entry = depart_lane
         for k, e in enumerate(edges):
-            lanes = e.getLanes()
-            if k + 1 < len(edges):
-                conns = e.getConnections(edges[k + 1])
-                mine = [c for c in conns if vclass is None or (c.getFromLane().allows(vclass)
-                                                               and c.getToLane().allows(vclass))]
-                conns = mine or conns  # a class no connection admits keeps SUMO's route as it is
-                if not conns:
-                    raise ValueError(f"no connection {e.getID()} -> {edges[k + 1].getID()}")
-                ref = entry if entry is not None else 0
-                want_to = arrival_lane if (k + 2 == len(edges) and arrival_lane is not None) else None
-                conn = min(conns, key=lambda c: (abs(c.getFromLane().getIndex() - ref),
-                                                 0 if want_to is None else abs(c.getToLane().getIndex() - want_to),
-                                                 c.getFromLane().getIndex()))
-                exit_idx = conn.getFromLane().getIndex()
-            else:
-                conn = None
-                exit_idx = arrival_lane if arrival_lane is not None else (entry if entry is not None else
-                                                                          _first_allowed(lanes, vclass))
-            exit_idx = int(np.clip(exit_idx, 0, len(lanes) - 1))
-            allowed = () if vclass is None else tuple(bool(ln.allows(vclass)) for ln in
-                                                      sorted(lanes, key=lambda ln: ln.getIndex()))
-            entry_idx = exit_idx if entry is None else int(np.clip(entry, 0, len(lanes) - 1))
-            exit_shape = np.asarray(lanes[exit_idx].getShape(), float)
-            limit_at.append((float(lanes[exit_idx].getSpeed()), n_points))
-            widths, centres = _lane_centres(lanes)
-            exit_off = tuple((centres - centres[exit_idx]).tolist())
-            if entry_idx != exit_idx:
-                entry_shape = np.asarray(lanes[entry_idx].getShape(), float)
-                L = polyline_length(exit_shape)
-                s0 = min(0.5 * L, 60.0)
-                cum = _cumlen(exit_shape)
-                pieces += [entry_shape[:1], polyline_point_at(exit_shape, s0)[None], exit_shape[cum > s0]]
-                piece_at.append((e.getID(), exit_idx, tuple((centres - centres[entry_idx]).tolist()), exit_off, widths,
-                                 allowed, n_points))
-                piece_at.append((e.getID(), exit_idx, exit_off, exit_off, widths, allowed, n_points + 2))
-            else:
-                pieces.append(exit_shape)
-                piece_at.append((e.getID(), exit_idx, exit_off, exit_off, widths, allowed, n_points))
-            n_points = sum(len(piece) for piece in pieces)
+            nxt = edges[k + 1] if k + 1 < len(edges) else None
+            want_to = arrival_lane if k + 2 == len(edges) else None
+            conn, exit_idx = self._exit(e, nxt, entry, want_to, arrival_lane, vclass)
+            self._lay_edge(e, entry, exit_idx, vclass, pieces, piece_at, limit_at)
             if conn is not None:
+                n_points = sum(len(piece) for piece in pieces)
                 link_at.append((conn, n_points))
                 for lane, shape, speed in self._via_lanes(conn):
                     limit_at.append((speed, n_points))
@@ -133,6 +98,57 @@ class RoutePlanner:
                     pieces.append(shape)
                     n_points += len(shape)
                 entry = conn.getToLane().getIndex()
+        return self._plan(pieces, link_at, limit_at, piece_at)
+
+    @staticmethod
+    def _exit(e, nxt, entry, want_to, arrival_lane, vclass):
+        """(the connection to edge ``nxt`` the path takes, None on the last edge; the lane index it
+        leaves ``e`` by): of the connections ``vclass`` may use, the one from the lane nearest the entry
+        lane (towards ``want_to`` on the edge before the last)."""
+        lanes = e.getLanes()
+        if nxt is None:
+            exit_idx = arrival_lane if arrival_lane is not None else (entry if entry is not None else
+                                                                      _first_allowed(lanes, vclass))
+            return None, int(np.clip(exit_idx, 0, len(lanes) - 1))
+        conns = e.getConnections(nxt)
+        mine = [c for c in conns if vclass is None or (c.getFromLane().allows(vclass) and c.getToLane().allows(vclass))]
+        conns = mine or conns  # a class no connection admits keeps SUMO's route as it is
+        if not conns:
+            raise ValueError(f"no connection {e.getID()} -> {nxt.getID()}")
+        ref = entry if entry is not None else 0
+        conn = min(conns, key=lambda c: (abs(c.getFromLane().getIndex() - ref),
+                                         0 if want_to is None else abs(c.getToLane().getIndex() - want_to),
+                                         c.getFromLane().getIndex()))
+        return conn, int(np.clip(conn.getFromLane().getIndex(), 0, len(lanes) - 1))
+
+    @staticmethod
+    def _lay_edge(e, entry, exit_idx: int, vclass, pieces: list, piece_at: list, limit_at: list) -> None:
+        """Append edge ``e``'s points (its exit lane's shape, blended in from the entry lane over
+        min(half the edge, 60 m) when they differ), its lane pieces and its speed limit."""
+        lanes = e.getLanes()
+        n_points = sum(len(piece) for piece in pieces)
+        allowed = () if vclass is None else tuple(bool(ln.allows(vclass)) for ln in
+                                                  sorted(lanes, key=lambda ln: ln.getIndex()))
+        entry_idx = exit_idx if entry is None else int(np.clip(entry, 0, len(lanes) - 1))
+        exit_shape = np.asarray(lanes[exit_idx].getShape(), float)
+        limit_at.append((float(lanes[exit_idx].getSpeed()), n_points))
+        widths, centres = _lane_centres(lanes)
+        exit_off = tuple((centres - centres[exit_idx]).tolist())
+        if entry_idx == exit_idx:
+            pieces.append(exit_shape)
+            piece_at.append((e.getID(), exit_idx, exit_off, exit_off, widths, allowed, n_points))
+            return
+        entry_shape = np.asarray(lanes[entry_idx].getShape(), float)
+        s0 = min(0.5 * polyline_length(exit_shape), 60.0)
+        cum = _cumlen(exit_shape)
+        pieces += [entry_shape[:1], polyline_point_at(exit_shape, s0)[None], exit_shape[cum > s0]]
+        piece_at.append((e.getID(), exit_idx, tuple((centres - centres[entry_idx]).tolist()), exit_off, widths,
+                         allowed, n_points))
+        piece_at.append((e.getID(), exit_idx, exit_off, exit_off, widths, allowed, n_points + 2))
+
+    def _plan(self, pieces, link_at, limit_at, piece_at) -> RoutePlan:
+        """The path from the laid points (consecutive duplicates dropped) and, at the arc lengths where
+        their points begin, the links, speed limits and lane pieces."""
         points = np.concatenate(pieces)
         keep = _keep_mask(points, tol=1e-3)
         path = points[keep]
