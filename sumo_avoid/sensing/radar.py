@@ -47,7 +47,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from sumo_avoid.core.config import field_doc
+from sumo_avoid.core.config import FieldError, field_doc
 from sumo_avoid.core.geometry import wrap_angle
 from sumo_avoid.core.types import Detections
 from sumo_avoid.sensing import occlusion
@@ -101,9 +101,11 @@ class RadarParams:
         if self.side_range_m <= 0:
             raise ValueError("radar.side_range_m > 0")
         if not 0 <= self.person_detection_prob <= 1:
-            raise ValueError("0 <= radar.person_detection_prob <= 1")
-        if self.person_range_factor > 1 or self.cyclist_range_factor > 1:
-            raise ValueError("radar.person_range_factor and cyclist_range_factor <= 1")
+            raise FieldError("person_detection_prob", "a probability in [0, 1]", self.person_detection_prob)
+        for key in ("person_range_factor", "cyclist_range_factor"):
+            if getattr(self, key) > 1:
+                raise FieldError(key, "a fraction of the range in (0, 1] (a person reflects less than a car)",
+                                 getattr(self, key))
 
     def mounts(self) -> tuple[str, ...]:
         """The radars these parameters fit on each ego, front first."""
