@@ -96,7 +96,7 @@ def obstacle_vehicles(obs, row: int, q, radius_m: float):
         return (*out, np.zeros(len(out[0]), bool))
     d = np.hypot(*(snap.pos - np.asarray(q, float)).T)
     o = np.flatnonzero((d < radius_m) & (np.arange(snap.n) != row))
-    vru = snap.is_person[o] | np.isin(np.asarray(snap.vclass, dtype=object)[o], list(VRU_CLASSES))
+    vru = snap.is_person[o] | np.array([snap.vclass[i] in VRU_CLASSES for i in o], bool).reshape(len(o))
     return snap.pos[o], snap.heading[o], snap.length[o], snap.width[o], snap.vel[o], vru
 
 

@@ -143,8 +143,8 @@ class SumoSim:
             ids = tuple(v for v in key if v in dims_of)  # libsumo keeps a previous run's results until a step
             self._static_key = key
             self._static = (ids, np.array([dims_of[v] for v in ids], dtype=float).reshape(-1, 2),
-                            np.array([v in self._egos for v in ids], dtype=bool))
-        ids, dims, is_ego = self._static
+                            np.array([v in self._egos for v in ids], dtype=bool), tuple(self._vclass[v] for v in ids))
+        ids, dims, is_ego, vclass = self._static
         n = len(ids)
         signals = self._signals()
         persons = self._read_persons() if self._persons else None
@@ -166,7 +166,6 @@ class SumoSim:
             if mine:
                 rows_e, v_e = zip(*mine)
                 flat[list(rows_e), 3] = np.asarray(v_e, float) + 0.0  # (+ 0.0: no -0.0 in the recording)
-        vclass = tuple(self._vclass[v] for v in ids)
         lane_pos = np.where([bool(x) for x in lane], flat[:, 4], np.nan)
         vel, length, width, person = direction * flat[:, 3:4], dims[:, 0], dims[:, 1], np.zeros(n, bool)
         if persons is not None:
