@@ -80,6 +80,7 @@ class RoadView:
     def __init__(self, task: EgoTask, turn_radius_m: float = 0.0, yaw_rate_radps: float = np.inf):
         self.frame = RouteFrame.from_polyline(task.path)
         self.lanes = RouteLanes(task.lanes) if task.lanes else None
+        self.walkways = task.walkways  # people there are off the carriageway: no margin beyond their size
         # d is measured from the drivable line (core.drivable), not the lane centre, where a turn
         # is tighter than the car's turning radius; elsewhere (and with no radius) they coincide
         self.line = (drivable_line(self.frame, self.lanes.corridor, 0.5 * task.width_m, turn_radius_m)
@@ -210,7 +211,7 @@ class RoadView:
         v_s, v_d = self.frame.velocity_to_frenet(s, d_raw, snap.vel[row][None, :])
         _, h_rel, vel = self._from_line(np.array([s]), d_raw, np.array([wrap_angle(snap.heading[row] - h_path)]),
                                         np.array([[v_s[0], v_d[0]]]))
-        o_pos, o_hd, o_len, o_wid, o_vel, vru = obstacle_vehicles(obs, row, q, sense_radius_m)
+        o_pos, o_hd, o_len, o_wid, o_vel, vru = obstacle_vehicles(obs, row, q, sense_radius_m, self.walkways)
         if len(o_pos):
             os_, od = self.frame.to_frenet(o_pos, np.full(len(o_pos), s), sense_radius_m)
             keep = np.isfinite(os_) & (np.abs(od) < MAX_ABS_D_M) & (np.abs(os_ - s) < sense_radius_m)

@@ -30,6 +30,7 @@ class EgoTask:
     width_m: float = 1.8  # the ego's width (SUMO's vehicle type), m
     length_m: float = 5.0  # ... and length, m
     vclass: str = "passenger"  # its SUMO vehicle class: which lanes it may use (LanePiece.allowed)
+    walkways: frozenset[str] = frozenset()  # the net's sidewalks and walking areas (lane ids): people there are off the carriageway
 
 
 @dataclass(frozen=True)
@@ -47,10 +48,15 @@ class Detections:
     radial_speed_mps: np.ndarray  # (D,) relative speed along the line of sight (< 0 closing)
     target: tuple[str, ...] = field(default=())  # (D,) true target id, "" = false alarm. EVALUATION ONLY
     mount: str = "front"  # which radar: "front" (boresight = heading), "rear" (heading + pi), "left" / "right" (heading + / - pi/2)
+    vru: np.ndarray | None = None  # (D,) bool: the return is labelled a person or cyclist (small cross-section); None = none are
 
     @property
     def n(self) -> int:
         return len(self.range_m)
+
+    def vru_mask(self) -> np.ndarray:
+        """(D,) bool: returns labelled as a person or cyclist (all False when the scan has no labels)."""
+        return np.zeros(self.n, bool) if self.vru is None else self.vru
 
     def points(self) -> np.ndarray:
         """(D, 2) world positions of the detections, m."""

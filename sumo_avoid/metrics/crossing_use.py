@@ -24,13 +24,14 @@ from sumo_avoid.rollout.result import RunResult
 def crossing_events(run: RunResult) -> list[dict]:
     if not run.tasks:
         return []
-    stand = run.scenario.table("layers.traffic").stop_speed_mps
+    rules = run.scenario.table("layers.traffic")
+    stand = rules.stop_speed_mps
     persons = run.persons if run.persons is not None else None
     by_step = persons.groupby("step").indices if persons is not None and len(persons) else {}
     out = []
     for vid, task, ego, s in _ego_tracks(run, lambda lk: bool(lk.crossings)):
         steps, t, v = ego["step"].to_numpy(), ego["time_s"].to_numpy(), np.abs(ego["speed"].to_numpy(float))
-        length = float(ego["length"].iloc[0])
+        length, half = float(ego["length"].iloc[0]), 0.5 * float(ego["width"].iloc[0]) + rules.crossing_margin_m
         for c in (c for lk in task.links for c in lk.crossings):
             k = first_crossing(s, c.s_enter_m)
             if k >= 0 and c.gives_way and people_may_cross(c, _signals_at(run.signals, t[k])):
@@ -39,7 +40,7 @@ def crossing_events(run: RunResult) -> list[dict]:
                 if len(rows):
                     p = persons.iloc[rows]
                     on = persons_at(c, p["lane"].fillna("").to_numpy(), p[["x", "y"]].to_numpy(float),
-                                    p[["vx", "vy"]].to_numpy(float))
+                                    p[["vx", "vy"]].to_numpy(float), half, rules.crossing_gap_m)
                     who = sorted(p["id"].astype(str).to_numpy()[on].tolist())
                 out.append({"ego": vid, "crossing": c.crossing, "time_s": float(t[k + 1]), "persons": who,
                             "kind": "entered", "violation": bool(who)})

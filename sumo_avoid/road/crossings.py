@@ -33,6 +33,7 @@ from shapely.geometry import LineString
 KERB_ZONE_M = 2.0  # a person on a walking area this close to a crossing's end may step onto it, m
 APPROACH_MPS = 0.2  # ... when walking towards it faster than this, m/s (or standing)
 STAND_MPS = 0.1  # slower than this a person stands, m/s
+APPROACH_BAND_M = 3.0  # a person beyond a crossing's end this close to its centre line may walk onto it, m
 PEOPLE_GREEN = frozenset("Gg")  # a crossing's signal states in which its people may walk
 
 
@@ -49,6 +50,9 @@ class CrossingLink:
     gives_way: bool  # the ego's link gives way to the people on it (junction logic)
     tls: str = ""  # the crossing's traffic light, "" = not signalised
     link_index: int = -1  # its index in the light's state string
+    #: the stretch of the crossing the ego's path passes over: distances from ``ends[0]`` towards
+    #: ``ends[1]``, m (the path's centre line; the whole crossing when not known)
+    strip: tuple[float, float] = (-np.inf, np.inf)
 
 
 def link_index(node, conn) -> int:
@@ -94,8 +98,20 @@ def crossing_links(net, conn, path: np.ndarray, cum: np.ndarray, s_from: float, 
         walks += [c.getToLane().getID() for c in lane.getOutgoing()]  # to the walking area at its end
         out.append(CrossingLink(lane.getEdge().getID(), lane_id, tuple(dict.fromkeys(w for w in walks if w != lane_id)),
                                 (tuple(map(float, shape[0])), tuple(map(float, shape[-1]))), s_in, s_out,
-                                gives_way(node, mine, internal.index(lane_id)), tls, index))
+                                gives_way(node, mine, internal.index(lane_id)), tls, index,
+                                _strip(path, cum, s_in, s_out, shape[0], shape[-1])))
     return tuple(sorted(out, key=lambda c: c.s_enter_m))
+
+
+def _strip(path, cum, s_in: float, s_out: float, a, b) -> tuple[float, float]:
+    """The stretch of the crossing from ``a`` to ``b`` that the path passes over between arc lengths
+    ``s_in`` and ``s_out``: the path sampled every 0.1 m there, projected on the crossing's axis."""
+    axis = np.asarray(b, float) - np.asarray(a, float)
+    axis /= max(float(np.hypot(*axis)), 1e-9)
+    s = np.arange(s_in, s_out + 0.1, 0.1)
+    xy = np.column_stack([np.interp(s, cum, path[:, 0]), np.interp(s, cum, path[:, 1])])
+    u = (xy - np.asarray(a, float)) @ axis
+    return float(u.min()), float(u.max())
 
 
 def _span(points: np.ndarray, cum: np.ndarray, area) -> tuple[float, float]:
@@ -111,12 +127,27 @@ def _span(points: np.ndarray, cum: np.ndarray, area) -> tuple[float, float]:
     return float(s[k[0]]), float(s[k[-1]])
 
 
-def persons_at(crossing: CrossingLink, lane, pos, vel) -> np.ndarray:
+def persons_at(crossing: CrossingLink, lane, pos, vel, half_width_m: float = np.inf, gap_m: float = np.inf,
+               horizon_s: float = np.inf, on_only: bool = False) -> np.ndarray:
     """Which persons (rows given by their SUMO lane ids ``lane``, centres ``pos`` (n, 2) and velocities
-    ``vel``) are on the crossing or about to step onto it (:mod:`module doc <sumo_avoid.road.crossings>`)."""
+    ``vel``) are on the crossing or about to step onto it (:mod:`module doc <sumo_avoid.road.crossings>`)
+    and not clear of the ego's path: within ``half_width_m`` of the crossing's :attr:`~CrossingLink.strip`,
+    or walking towards it from at most ``gap_m`` before it. As SUMO's drivers judge it
+    (``MSPModel_Striping::blockedAtDist``: a person past the vehicle's path, or standing beside it,
+    does not hold it; SUMO lets a person hold it only after 2 s of standing, here at once). A person
+    waiting at a zebra's kerb holds it wherever it stands, and one off the crossing in line with it
+    (within :data:`APPROACH_BAND_M` of its centre line, beyond one of its ends) walking onto it holds it
+    when its way to the ego's stretch is at most ``gap_m`` (people reach a corner on the sidewalk and
+    step on without stopping; one walking along a sidewalk past a crossing's end is not walking onto it).
+    With ``horizon_s`` a person walking towards the stretch holds the ego only if it reaches it within
+    that time (an ego already over an earlier crossing goes on unless someone will be in its way before
+    it is across); with ``on_only`` only the people on the crossing count (its signal has turned: those
+    on it finish crossing, the others wait). The defaults: the whole crossing, only who is on it or at its kerb."""
     lane = np.asarray(lane, dtype=object)
+    pos, vel = np.asarray(pos, float).reshape(-1, 2), np.asarray(vel, float).reshape(-1, 2)
     on = lane == crossing.lane
     near = np.isin(lane, list(crossing.walking_areas))
+    waiting = np.zeros(len(lane), bool)
     if near.any():
         ends = np.asarray(crossing.ends, float)
         d = np.hypot(pos[:, None, 0] - ends[None, :, 0], pos[:, None, 1] - ends[None, :, 1])
@@ -128,9 +159,31 @@ def persons_at(crossing: CrossingLink, lane, pos, vel) -> np.ndarray:
         standing = np.hypot(vel[:, 0], vel[:, 1]) < STAND_MPS
         # standing at the kerb: waiting for the traffic to stop at a zebra; at a signalised corner, where two
         # crossings meet, a person standing waits for the other crossing's green (on its own green it walks)
-        waiting = standing if not crossing.tls else np.zeros(len(pos), bool)
+        waiting = near & close & (standing if not crossing.tls else np.zeros(len(pos), bool))
         on |= near & close & ((speed_in > APPROACH_MPS) | waiting)
-    return on
+    if np.isinf(half_width_m):
+        return on
+    ends = np.asarray(crossing.ends, float)
+    span = max(float(np.hypot(*(ends[1] - ends[0]))), 1e-9)
+    axis = (ends[1] - ends[0]) / span
+    u = (pos - ends[0]) @ axis  # along the crossing from its first end, m
+    w = vel @ axis  # walking speed along it, m/s
+    lo, hi = crossing.strip[0] - half_width_m, crossing.strip[1] + half_width_m
+    inside = (u >= lo) & (u <= hi)
+    reach = gap_m if np.isinf(horizon_s) else np.minimum(gap_m, horizon_s * np.abs(w))  # how far before the stretch a walker still holds the ego
+    coming = ((w > APPROACH_MPS) & (u < lo) & (lo - u <= reach)) | ((w < -APPROACH_MPS) & (u > hi) & (u - hi <= reach))
+    if on_only:
+        return (lane == crossing.lane) & (inside | coming)
+    held = on & (inside | coming | waiting)
+    # off the crossing, walking towards one of its ends (along a sidewalk, over a corner): held when the
+    # walk to that end and on along the crossing to the ego's stretch is at most gap_m (they may cross)
+    rest = ~on & (lane != crossing.lane)
+    if rest.any():
+        across = np.abs((pos - ends[0]) @ np.array([-axis[1], axis[0]]))  # from the crossing's centre line, m
+        before = rest & (u < 0.0) & (w > APPROACH_MPS) & (max(lo, 0.0) - u <= reach)
+        beyond = rest & (u > span) & (w < -APPROACH_MPS) & (u - min(hi, span) <= reach)
+        held |= (before | beyond) & (across <= APPROACH_BAND_M)
+    return held
 
 
 def people_may_cross(crossing: CrossingLink, signals) -> bool:

@@ -72,6 +72,8 @@ class RoadElements:
     junctions: Mapping[str, JunctionInfo]
     crossings: Mapping[str, CrossingInfo]
     walking_areas: Mapping[str, LaneInfo]  # keyed by lane id
+    #: ids of the lanes only people walk on, off the carriageway: sidewalks and walking areas (not crossings)
+    walkways: frozenset[str] = frozenset()
 
     def lanes_allowing(self, vclass: str, functions=("", INTERNAL)) -> tuple[str, ...]:
         """Ids of the lanes (of the given edge functions) that admit ``vclass``, in id order."""
@@ -100,5 +102,7 @@ def read_elements(net) -> RoadElements:
         shp = node.getShape()
         junctions[node.getID()] = JunctionInfo(node.getID(), node.getType(),
                                                _frozen(shp if shp else np.zeros((0, 2))).reshape(-1, 2))
+    walkways = frozenset(i for i, ln in lanes.items()
+                         if ln.function == WALKINGAREA or (ln.function != CROSSING and ln.allow == {"pedestrian"}))
     return RoadElements(MappingProxyType(lanes), MappingProxyType(junctions), MappingProxyType(crossings),
-                        MappingProxyType(walking))
+                        MappingProxyType(walking), walkways)

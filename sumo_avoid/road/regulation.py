@@ -34,6 +34,11 @@ class RulesParams:
                                                                "(slower than this) before it goes on, m/s")
     stop_zone_m: float = field_doc(3.0, positive=True, doc="... with its front at most this far before the stop "
                                                             "position (stop_margin_m before the line), m")
+    crossing_gap_m: float = field_doc(10.0, doc="at a crossing the ego gives way to a person walking towards its "
+                                              "path from at most this far (SUMO's jmCrossingGap default; a person "
+                                              "past the path, or standing beside it, does not hold the ego), m")
+    crossing_margin_m: float = field_doc(1.0, doc="... and to one within this much of the footprint's side as it "
+                                                  "passes over the crossing, m")
     zipper_headway_s: float = field_doc(1.0, positive=True, doc="t_c of a zipper merge ('Z' links): the ego enters "
                                                                  "at least this long after and before the foes "
                                                                  "(accepted freeway-merge lead/lag gaps are ~1 s), s")

@@ -38,7 +38,7 @@ class EgoBook:
         if self.uses_goals:
             self.goals[vid] = (float(goal[0]), float(goal[1]))
         task = EgoTask(vid, goal, path, self.cruise_speed_mps, links, limits, lanes, info.width_m, info.length_m,
-                       info.vclass)
+                       info.vclass, _walkways(self.road))
         self.active[vid] = task
         self.tasks[vid] = task
         if self.follow_routes:
@@ -88,3 +88,9 @@ class EgoBook:
 
     def all_done(self) -> bool:
         return len(self.finished) == len(self.ids) and not self.active
+
+
+def _walkways(road) -> frozenset:
+    """The net's sidewalks and walking areas (none for a road that does not list its elements)."""
+    elements = getattr(road, "elements", None)
+    return elements.walkways if elements is not None else frozenset()

@@ -7,8 +7,14 @@
   stops ``stop_margin_m`` before the crossing's area -- when it can still stop braking at
   ``commit_decel_mps2`` at most; a crossing whose own signal is not green for the people (``G``/``g``)
   is not theirs to cross (:func:`~sumo_avoid.road.crossings.people_may_cross`);
-* never stop on a crossing: the ego does not enter a crossing while a vehicle stands (slower than
-  :data:`QUEUE_MPS`) on its path within its own length plus :data:`ROOM_M` beyond the crossing.
+* never stop on a crossing: the ego does not enter a crossing while a vehicle or a person stands (slower
+  than :data:`QUEUE_MPS`) on its path within its own length plus :data:`ROOM_M` beyond the crossing, and
+  when it waits before a crossing where it would stand on an earlier one (a turn over the crossings
+  of its entry and exit arms, a car length apart or less) it waits before the earlier one.
+
+A person holds the ego as SUMO's drivers judge it: on the crossing or stepping onto it, and within
+``crossing_margin_m`` of the footprint's side where the ego's path passes over the crossing, or
+walking towards that stretch from at most ``crossing_gap_m`` (:func:`~sumo_avoid.road.crossings.persons_at`).
 
 ``cap`` returns (speed cap, arc length of the crossing's entry that sets it), like the layer's other
 rules: the cap is the speed from which the ego stops at comfortable braking before the crossing.
@@ -25,13 +31,15 @@ from sumo_avoid.road.polyline import polyline_project_many
 QUEUE_MPS = 1.0  # a vehicle slower than this beyond a crossing is standing in a queue, m/s
 ROOM_M = 1.0  # the ego enters a crossing only with its length + this free beyond it, m
 LANE_HALF_M = 1.6  # a vehicle this close to the ego's path (centre to path) is on it, m
+CLEAR_ACCEL_MPS2 = 1.5  # an ego over a crossing clears the next one speeding up at least this, m/s^2
 
 
 def room_beyond(crossing, path: np.ndarray, snap, ego_row: int, need_m: float) -> bool:
-    """Is the ego's path free of standing vehicles for ``need_m`` beyond the crossing?"""
+    """Is the ego's path free of standing vehicles and people for ``need_m`` beyond the crossing? (People
+    waiting at a corner stand where SUMO's walking area meets the road, which a tight turn sweeps.)"""
     exit_xy = np.array([np.interp(crossing.s_exit_m, _cum(path), path[:, 0]),
                         np.interp(crossing.s_exit_m, _cum(path), path[:, 1])])
-    rows = np.flatnonzero(~snap.is_person & (np.arange(snap.n) != ego_row) & (snap.speed < QUEUE_MPS))
+    rows = np.flatnonzero((np.arange(snap.n) != ego_row) & (snap.speed < QUEUE_MPS))
     if len(rows) == 0:
         return True
     near = rows[np.hypot(*(snap.pos[rows] - exit_xy).T) <= need_m + snap.length[rows] + LANE_HALF_M]
@@ -56,23 +64,51 @@ class CrossingRule:
     def __init__(self, params):
         self.p = params
 
-    def cap(self, task, s_front: float, v: float, snap, ego_row: int, ego_length_m: float) -> tuple[float, float]:
+    def cap(self, task, s_front: float, v: float, snap, ego_row: int, ego_length_m: float,
+            ego_width_m: float = 1.8) -> tuple[float, float]:
         p = self.p
         persons = np.flatnonzero(snap.is_person)
-        for link in task.links:
-            for c in link.crossings:
-                d = c.s_enter_m - s_front
-                if d <= 0.0:
-                    continue  # on it or past it: clear it
-                if d > p.lookahead_m:
-                    return math.inf, -1.0
-                if v * v / (2.0 * p.commit_decel_mps2) > d:
-                    continue  # too late to stop before it: go on over it
-                stop = math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0))
-                if c.gives_way and len(persons) and people_may_cross(c, snap.signals):
-                    lanes = [snap.lane[r] for r in persons]
-                    if persons_at(c, lanes, snap.pos[persons], snap.vel[persons]).any():
-                        return stop, c.s_enter_m
-                if not room_beyond(c, task.path, snap, ego_row, ego_length_m + ROOM_M):
-                    return stop, c.s_enter_m
+        crossings = [c for link in task.links for c in link.crossings]
+        for i, c in enumerate(crossings):
+            d = c.s_enter_m - s_front
+            if d <= 0.0:
+                continue  # on it or past it: clear it
+            if d > p.lookahead_m:
+                return math.inf, -1.0
+            if v * v / (2.0 * p.commit_decel_mps2) > d:
+                continue  # too late to stop before it: go on over it
+            # already over an earlier crossing it would stand on while waiting: it goes on unless someone
+            # will be in its way before it is across
+            over = any(b.s_enter_m <= s_front and s_front - ego_length_m - p.stop_margin_m < b.s_exit_m
+                       for b in crossings[:i])
+            horizon = self._time_to_clear(c, s_front, v, ego_length_m) if over else math.inf
+            if self._blocked(c, task, snap, ego_row, persons, ego_length_m, ego_width_m, horizon):
+                line = self._wait_line(crossings[:i], c.s_enter_m, s_front, v, ego_length_m)
+                return math.sqrt(2.0 * p.comfort_decel_mps2 * max(line - s_front - p.stop_margin_m, 0.0)), line
         return math.inf, -1.0
+
+    def _time_to_clear(self, c, s_front: float, v: float, ego_length_m: float) -> float:
+        """Time until the ego's rear leaves crossing ``c`` speeding up at ``clear_accel_mps2`` from ``v``."""
+        dist = c.s_exit_m + ego_length_m - s_front
+        a = CLEAR_ACCEL_MPS2
+        return (-v + math.sqrt(v * v + 2.0 * a * max(dist, 0.0))) / a
+
+    def _blocked(self, c, task, snap, ego_row, persons, ego_length_m, ego_width_m, horizon_s=math.inf) -> bool:
+        p = self.p
+        if c.gives_way and len(persons):
+            lanes = [snap.lane[r] for r in persons]
+            # on the people's green: anyone on it or about to cross; after it: those still on it
+            if persons_at(c, lanes, snap.pos[persons], snap.vel[persons], 0.5 * ego_width_m + p.crossing_margin_m,
+                          p.crossing_gap_m, horizon_s, on_only=not people_may_cross(c, snap.signals)).any():
+                return True
+        return not room_beyond(c, task.path, snap, ego_row, ego_length_m + ROOM_M)
+
+    def _wait_line(self, before, line: float, s_front: float, v: float, ego_length_m: float) -> float:
+        """Where the ego waits for crossing entry ``line``: before it, or before an earlier crossing
+        (``before``, in path order) it would otherwise stand on, if it can still stop there."""
+        for c in reversed(before):
+            stand_rear = line - self.p.stop_margin_m - ego_length_m
+            d = c.s_enter_m - s_front
+            if c.s_enter_m < line and stand_rear < c.s_exit_m and d > 0 and v * v / (2.0 * self.p.commit_decel_mps2) <= d:
+                line = c.s_enter_m
+        return line

@@ -31,7 +31,10 @@ Per ego and step, with s the arc length of the ego's front bumper projected on i
   (``speed_factor`` unset): a cap in a junction shifts a controller's timing there, which can
   leave APF-SA stalled after being passed.
 
-The command (desired velocity, m/s) keeps its direction; only its length is capped. The stop
+The command (desired velocity, m/s) keeps its direction; only its length is capped -- except while
+the ego is held at a line (a signal, a yield line, a crossing) below ``HELD_MPS``: then it points along
+the route path at the ego's front, so the ego waits lined up with its lane instead of standing askew,
+half turned into the junction (where its rear blocks the next lane and its corner the sidewalk). The stop
 line works as a virtual obstacle that no controller can drive through; SPEC §5 hands it to the
 controller as one, which a potential-field controller would also steer around (the departure is
 deliberate: a stop line is not something to swerve past). Counters: ``rules_signal_stops``
@@ -45,7 +48,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from sumo_avoid.road.polyline import polyline_track
+from sumo_avoid.road.polyline import polyline_point_at, polyline_track
 from sumo_avoid.road.regulation import RED, STOP_SIGNS, RulesParams
 from sumo_avoid.core.types import EgoTask, Keys
 from sumo_avoid.safety.crossing_rule import CrossingRule
@@ -63,6 +66,15 @@ from sumo_avoid.road.yielding import (
 )
 
 STOP, GO = "stop", "go"
+
+HELD_MPS = 2.0  # held at a line below this speed, the ego waits lined up with its lane, m/s
+
+
+def _direction(path, s_m: float) -> np.ndarray:
+    """(2,) unit direction of the route path at arc length ``s_m`` (over the next metre)."""
+    d = polyline_point_at(path, s_m + 1.0) - polyline_point_at(path, s_m)
+    return d / max(float(np.hypot(d[0], d[1])), 1e-12)
+
 
 @dataclass
 class _Ego:
@@ -219,7 +231,7 @@ class TrafficRulesLayer:
             if give < v or give < 0.5:
                 self._yields.add((vid, yline))
             speed = math.hypot(out[i, 0], out[i, 1])
-            cross, cline = self._crossings.cap(e.task, e.s_m, v, snap, int(r), float(snap.length[r]))
+            cross, cline = self._crossings.cap(e.task, e.s_m, v, snap, int(r), float(snap.length[r]), float(snap.width[r]))
             if cross < v or cross < 0.5:
                 self._crossing_yields.add((vid, cline))
             give = min(give, cross)
@@ -227,6 +239,10 @@ class TrafficRulesLayer:
             if speed > cap:
                 self._caps += road < min(sig, give)
                 out[i] *= cap / speed
+                if min(sig, give) <= cap and cap < HELD_MPS:
+                    # held at a line: wait lined up with the lane, not already turned into the junction
+                    # (a car standing askew at its line blocks the next lane and its corner the sidewalk)
+                    out[i] = cap * _direction(e.task.path, e.s_m)
         return out
 
     def stats(self) -> dict:

@@ -81,22 +81,28 @@ def perceived_obstacles(det, vid: str, length_m: float = ASSUMED_LENGTH_M, width
     return perceived_boxes(det, det.of(vid), along, length_m, width_m)
 
 
-def obstacle_vehicles(obs, row: int, q, radius_m: float):
+def obstacle_vehicles(obs, row: int, q, radius_m: float, walkways=frozenset()):
     """Other road users for the ego at snapshot ``row`` as (pos, heading, length, width, vel, vru):
     from the radar when ``obs.detections`` is set (moving along ``obs.route_heading`` of that ego
     if given, see :func:`perceived_boxes`), else ground truth within ``radius_m`` of q. ``vru``
-    (bool) marks the vulnerable road users (a person, a cyclist:
-    :data:`~sumo_avoid.road.elements.VRU_CLASSES`), known only from ground truth (radar: none)."""
+    (bool) marks the vulnerable road users on the carriageway (a person, a cyclist:
+    :data:`~sumo_avoid.road.elements.VRU_CLASSES`): from ground truth, or the radar's label of the
+    return. A person on one of the ``walkways`` (lane ids: sidewalks, walking areas) is off the
+    carriageway and not marked (a car passes the people on a sidewalk, or waiting at a corner, at their
+    size; SUMO puts the ones waiting at a corner at the kerb's edge, inside a tight turn's margin);
+    the radar does not know where a return stands, so its labelled returns are all marked."""
     snap = obs.snapshot
     if obs.detections is not None:  # one scan per radar mount (front, rear)
         route = obs.route_heading
         along = None if route is None else float(route[obs.index(snap.ids[row])])
-        parts = [perceived_obstacles(d, snap.ids[row], along=along) for d in obs.detections]
-        out = tuple(np.concatenate(x) for x in zip(*parts)) if len(parts) > 1 else parts[0]
-        return (*out, np.zeros(len(out[0]), bool))
+        parts = [(*perceived_obstacles(d, snap.ids[row], along=along), d.vru_mask()[d.of(snap.ids[row])])
+                 for d in obs.detections]
+        return tuple(np.concatenate(x) for x in zip(*parts)) if len(parts) > 1 else parts[0]
     d = np.hypot(*(snap.pos - np.asarray(q, float)).T)
     o = np.flatnonzero((d < radius_m) & (np.arange(snap.n) != row))
     vru = snap.is_person[o] | np.array([snap.vclass[i] in VRU_CLASSES for i in o], bool).reshape(len(o))
+    if walkways and vru.any():
+        vru &= ~np.array([snap.is_person[i] and snap.lane[i] in walkways for i in o], bool).reshape(len(o))
     return snap.pos[o], snap.heading[o], snap.length[o], snap.width[o], snap.vel[o], vru
 
 

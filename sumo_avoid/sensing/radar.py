@@ -83,6 +83,9 @@ class RadarParams:
                                                       "(on top of detection_prob)")
     cyclist_range_factor: float = field_doc(0.56, positive=True, doc="... a cyclist (vehicle class bicycle): "
                                             "0 dBsm against +10 dBsm")
+    vru_label_prob: float = field_doc(1.0, doc="probability that a reported person's or cyclist's return is "
+                                               "labelled a VRU (small cross-section); unlabelled, the controllers "
+                                               "keep a car's margin to it (docs/radar.md)")
 
     def __post_init__(self):
         if self.max_range_m <= 0:
@@ -100,8 +103,9 @@ class RadarParams:
             raise ValueError("0 < radar.side_fov_deg < 180")
         if self.side_range_m <= 0:
             raise ValueError("radar.side_range_m > 0")
-        if not 0 <= self.person_detection_prob <= 1:
-            raise FieldError("person_detection_prob", "a probability in [0, 1]", self.person_detection_prob)
+        for key in ("person_detection_prob", "vru_label_prob"):
+            if not 0 <= getattr(self, key) <= 1:
+                raise FieldError(key, "a probability in [0, 1]", getattr(self, key))
         for key in ("person_range_factor", "cyclist_range_factor"):
             if getattr(self, key) > 1:
                 raise FieldError(key, "a fraction of the range in (0, 1] (a person reflects less than a car)",
@@ -205,15 +209,18 @@ class Radar:
         e, n = self._candidates(spos, fwd, centre, radius, rows, p.max_range_m, math.cos(half), math.sin(half))
         ptr = np.concatenate([[0], np.cumsum(np.bincount(e, minlength=len(rows)))]).astype(np.int64)
         ego, tgt, rng, az, vr = self._scan(spos, hd, svel, polys, vel, ptr, n, half, p.max_range_m)
+        small = None
         if snap.is_person.any() or "bicycle" in snap.vclass:  # small targets: shorter range, missed more often
-            ego, tgt, rng, az, vr = self._small_targets(snap, ego, tgt, rng, az, vr)
+            ego, tgt, rng, az, vr, small = self._small_targets(snap, ego, tgt, rng, az, vr)
         det = Detections(snap.time_s, tuple(ego_ids), spos, hd, svel, ego, rng, az, vr,
-                         tuple([ids[i] for i in tgt.tolist()]), mount=self.mount)
+                         tuple([ids[i] for i in tgt.tolist()]), mount=self.mount, vru=small)
         return self._imperfect(det)
 
     def _small_targets(self, snap, ego, tgt, range_m, az, vr):
         """Drop returns of persons beyond ``person_range_factor`` x the range (cyclists: their factor)
-        and, of the persons left, each with probability 1 - ``person_detection_prob``."""
+        and, of the persons left, each with probability 1 - ``person_detection_prob``; label the
+        returns kept: a person's or cyclist's is labelled a VRU with probability ``vru_label_prob``
+        (its small cross-section, as an object-level radar's classifier reports it)."""
         p = self.p
         vehicle = tgt < snap.n
         row = np.where(vehicle, tgt, 0)
@@ -224,15 +231,21 @@ class Radar:
         if p.person_detection_prob < 1 and (person & keep).any():
             k = np.flatnonzero(person & keep)
             keep[k] = self.rng.random(len(k)) < p.person_detection_prob
-        return ego[keep], tgt[keep], range_m[keep], az[keep], vr[keep]
+        small = (person | cyclist)[keep]
+        if p.vru_label_prob < 1 and small.any():
+            k = np.flatnonzero(small)
+            small[k] = self.rng.random(len(k)) < p.vru_label_prob
+        return ego[keep], tgt[keep], range_m[keep], az[keep], vr[keep], small
 
     def _imperfect(self, det: Detections) -> Detections:
         p, g = self.p, self.rng
         D = det.n
+        small = det.vru
         if p.detection_prob < 1:
             keep = g.random(D) < p.detection_prob
             e, r, a, v = det.ego[keep], det.range_m[keep], det.azimuth_rad[keep], det.radial_speed_mps[keep]
             tgt = tuple([t for t, k in zip(det.target, keep.tolist()) if k])
+            small = None if small is None else small[keep]
         else:
             e, r, a, v, tgt = det.ego, det.range_m, det.azimuth_rad, det.radial_speed_mps, det.target
         r = r + g.normal(0.0, p.range_sigma_m, len(r)) if p.range_sigma_m else r
@@ -250,9 +263,10 @@ class Radar:
             fv = -(sv[:, 0] * np.cos(det.sensor_heading[fe] + fa) + sv[:, 1] * np.sin(det.sensor_heading[fe] + fa))
             e, r, a, v = (np.concatenate(x) for x in ((e, fe), (r, fr), (a, fa), (v, fv)))
             tgt = tgt + ("",) * len(fe)
+            small = None if small is None else np.concatenate([small, np.zeros(len(fe), bool)])  # clutter: unlabelled
         if p.angular_resolution_deg > 0:
             step = math.radians(p.angular_resolution_deg)
             a = np.round(a / step) * step
         r = np.clip(r, 0.0, None)
         return Detections(det.time_s, det.ego_ids, det.sensor_pos, det.sensor_heading, det.sensor_vel,
-                          e.astype(int), r, a, v, tgt, det.mount)
+                          e.astype(int), r, a, v, tgt, det.mount, small)

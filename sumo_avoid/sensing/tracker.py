@@ -46,6 +46,7 @@ class Tracker:
         self._p = np.zeros((0, 2))  # world position when last seen, m
         self._v = np.zeros((0, 2))  # estimated velocity, m/s
         self._t = np.zeros(0)  # time last seen, s
+        self._s = np.zeros(0, bool)  # labelled a person or cyclist
         self._scan_time = -math.inf
 
     def update(self, det, along=None):
@@ -63,7 +64,7 @@ class Tracker:
             ego_idx = {v: i for i, v in enumerate(ref.ego_ids)}
             e = np.array([ego_idx.get(v, -1) for v in self._ids] + [-1], dtype=int)[self._e]
             k = np.flatnonzero(e >= 0)
-            self._e, self._p, self._v, self._t = e[k], self._p[k], self._v[k], self._t[k]
+            self._e, self._p, self._v, self._t, self._s = e[k], self._p[k], self._v[k], self._t[k], self._s[k]
             self._ids = ref.ego_ids
         if now > self._scan_time:
             self._scan_time = now
@@ -86,6 +87,7 @@ class Tracker:
             self._p = np.concatenate([p_new, self._p[k]])
             self._v = np.concatenate([v_new, self._v[k]])
             self._t = np.concatenate([np.full(len(e_new), now), self._t[k]])
+            self._s = np.concatenate([d.vru_mask() for d in scans] + [self._s[k]])
         # the front scan's own rows and the coasted ones (the other mounts' current rows skipped)
         n_cur = sum(d.n for d in scans)
         rows = np.concatenate([np.arange(ref.n), np.arange(n_cur, len(self._e))]).astype(int)
@@ -95,7 +97,8 @@ class Tracker:
         u = np.column_stack([np.cos(a), np.sin(a)])
         vr = np.einsum("ij,ij->i", self._v[rows] - ref.sensor_vel[e], u)
         out = Detections(now, ref.ego_ids, ref.sensor_pos, ref.sensor_heading, ref.sensor_vel, e, r, az, vr,
-                         ref.target + ("",) * (len(rows) - ref.n), ref.mount)
+                         ref.target + ("",) * (len(rows) - ref.n), ref.mount,
+                         None if ref.vru is None and not self._s.any() else self._s[rows])
         return out if not isinstance(det, tuple) else (out,) + scans[1:]
 
     def _polar(self, det, e, now, rows=slice(None)):

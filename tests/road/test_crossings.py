@@ -110,3 +110,48 @@ def test_a_turn_at_a_light_gives_way_to_people_on_its_exit_crossing(signalised):
     green = [s for s in states if s[straight.link_index] in "Gg" and s[exit_straight.link_index] in "Gg"]
     assert states and green == []
     assert any(s[right.link_index] in "Gg" and s[exit_right.link_index] in "Gg" for s in states)
+
+
+def test_a_person_past_the_egos_path_or_standing_beside_it_does_not_hold_it():
+    # the crossing runs from y = -6 to y = 6 along x = 2; the ego's path passes over y in [-2.6, -0.6]
+    # (strip measured from the first end: 3.4 .. 5.4 m); footprint half width 0.9 + margin 1 m: the
+    # persons that hold it are within [1.5, 7.3] m of the first end, or walk towards that stretch from
+    # at most 3 m (gap)
+    c = CrossingLink(":Z_c0", ":Z_c0_0", (":Z_w0_0", ":Z_w1_0"), ((2.0, -6.0), (2.0, 6.0)), 248.0, 252.0, True,
+                     strip=(3.4, 5.4))
+    lanes = [":Z_c0_0"] * 7 + [":Z_w0_0"]
+    pos = np.array([[2.0, -1.5], [2.0, 2.0], [2.0, 3.0], [2.0, 3.0], [2.0, -5.0], [2.0, -3.0], [2.0, 1.0],
+                    [2.0, -7.9], [2.0, -4.5]])
+    vel = np.array([[0.0, 0.0], [0.0, 1.2], [0.0, -1.2], [0.0, 0.0], [0.0, -1.2], [0.0, 1.2], [0.0, -1.2],
+                    [0.0, 1.0], [0.0, 1.2]])
+    lanes.append(":Z_c0_0")
+    # standing in the strip; walked past it (u 8 > 7.3); 1.7 m beyond it walking back towards it; standing
+    # 1.7 m beyond it; 0.5 m before it walking away; u 3.0: inside; u 7.0: inside; stepping onto the crossing
+    # from the walking area at u -1.9, 3.4 m before the stretch (beyond the 3 m gap); at u 1.5, the
+    # stretch's edge: held
+    held = persons_at(c, lanes, pos, vel, half_width_m=1.9, gap_m=3.0)
+    assert held.tolist() == [True, False, True, False, False, True, True, False, True]
+    # without a half width (the whole crossing) every one on it or stepping onto it holds it
+    assert persons_at(c, lanes, pos, vel).tolist() == [True] * 9
+
+
+def test_after_the_peoples_green_only_those_on_the_crossing_hold_and_a_horizon_shortens_the_reach():
+    c = CrossingLink(":Z_c0", ":Z_c0_0", (":Z_w0_0", ":Z_w1_0"), ((2.0, -6.0), (2.0, 6.0)), 248.0, 252.0, True,
+                     strip=(3.4, 5.4))
+    # the stretch's margin begins at u = 1.5: one on the crossing at u 1.0 walking at 1.25 m/s (0.5 m, 0.4 s
+    # away); one at the kerb 1 m before the crossing walking onto it (2.5 m); one on a sidewalk in line with
+    # it 2 m beyond its end (3.5 m)
+    lanes = [":Z_c0_0", ":Z_w0_0", "ZE_0"]
+    pos = np.array([[2.0, -5.0], [2.0, -7.0], [2.0, -8.0]])
+    vel = np.array([[0.0, 1.25], [0.0, 1.2], [0.0, 1.2]])
+    assert persons_at(c, lanes, pos, vel, 1.9, 10.0).tolist() == [True, True, True]
+    assert persons_at(c, lanes, pos, vel, 1.9, 10.0, on_only=True).tolist() == [True, False, False]
+    # within 1.5 s a walker covers 1.8-1.9 m: the one on the crossing still holds, the others not
+    assert persons_at(c, lanes, pos, vel, 1.9, 10.0, horizon_s=1.5).tolist() == [True, False, False]
+    assert persons_at(c, lanes, pos, vel, 1.9, 10.0, horizon_s=0.3).tolist() == [False, False, False]
+
+
+def test_the_walkways_are_the_sidewalks_and_walking_areas(zebra):
+    w = zebra.elements.walkways
+    assert {":Z_w0_0", ":Z_w1_0", "WZ_0", "ZE_0"} <= w
+    assert ":Z_c0_0" not in w and "WZ_1" not in w and not any(lane.startswith(":Z_c") for lane in w)

@@ -1,7 +1,7 @@
 """Pedestrians on a zebra, on real SUMO (a street netconvert builds here with sidewalks and a crossing
 with priority, one person walking across): a blind ego runs the person over and every count sees it;
-an APF-SA ego under the traffic rules stops before the crossing while the person is on it and goes
-when it is free (SPEC §6)."""
+an APF-SA ego under the traffic rules stops before the crossing while the person is on its way and
+goes when its path is free (SPEC §6)."""
 from __future__ import annotations
 
 import pathlib
@@ -20,7 +20,7 @@ ROUTES = """<routes>
   <vType id="ego_car" length="4.5" width="1.8" accel="3" decel="8" maxSpeed="20"/>
   <route id="east" edges="WZ ZE"/>
   <vehicle id="ego" type="ego_car" route="east" depart="0" departSpeed="{speed}" departLane="1"/>
-  <person id="walker" depart="{walk}" departPos="3"><walk from="ZE" to="EZ" arrivalPos="230"/></person>
+  <person id="walker" depart="{walk}" departPos="{start}"><walk from="{side}" to="{other}" arrivalPos="{end}"/></person>
 </routes>
 """
 
@@ -42,8 +42,11 @@ def street(tmp_path_factory) -> pathlib.Path:
     return d
 
 
-def _run(d: pathlib.Path, name: str, speed: float, walk_s: float, ego: str):
-    (d / f"{name}.rou.xml").write_text(ROUTES.format(speed=speed, walk=walk_s))
+def _run(d: pathlib.Path, name: str, speed: float, walk_s: float, ego: str, far_side: bool = False):
+    """The walker steps onto the zebra from the ego's side of the street (the south sidewalk of ZE), or
+    with ``far_side`` from the other (EZ's, 248 m long), and ends its walk on the far sidewalk (4 m on)."""
+    walk = dict(side="EZ", other="ZE", start=245, end=4) if far_side else dict(side="ZE", other="EZ", start=3, end=230)
+    (d / f"{name}.rou.xml").write_text(ROUTES.format(speed=speed, walk=walk_s, **walk))
     (d / f"{name}.toml").write_text(f'name = "{name}"\n[sim]\nnet = "z.net.xml"\nroutes = ["{name}.rou.xml"]\n'
                                     f"duration_s = 60.0\n[ego]\nids = [\"ego\"]\n{ego}")
     res = runner.run(scenario.load(d / f"{name}.toml"))
@@ -67,7 +70,7 @@ def test_a_blind_ego_runs_a_pedestrian_over_and_every_count_sees_it(street):
 
 
 def test_the_ego_stops_before_the_zebra_while_a_person_crosses_and_goes_when_it_is_free(street):
-    res, m = _run(street, "gives_way", 12.0, 13.0, "cruise_speed_mps = 12.0\n")
+    res, m = _run(street, "gives_way", 12.0, 13.0, "cruise_speed_mps = 12.0\n", far_side=True)
     assert m["goal_reached"] and m["collisions"] == 0 and m["vru_collisions"] == 0 and m["sumo_collisions"] == 0
     assert m["rules_crossing_yields"] == 1
     link = res.tasks["ego"].links[0]
@@ -78,9 +81,12 @@ def test_the_ego_stops_before_the_zebra_while_a_person_crosses_and_goes_when_it_
     on = walker.index[walker["lane"] == c.lane]
     enter_x = -250.0 + c.s_enter_m  # the path runs along y = -1.6 from x = -250
     assert len(on) > 50  # the person walked over the crossing, ~8 s
-    assert (front_x.reindex(on).dropna() < enter_x).all()  # the ego never entered while the person was on it
+    # the person walks from the north over both lanes. The ego never entered while the person was on its way: as
+    # SUMO's drivers do, it goes once the person is past its path (the path at y = -1.6, the footprint 0.9 m either side, 1 m margin)
+    entered = front_x.reindex(on).dropna() >= enter_x
+    assert (walker.loc[entered[entered].index, "y"] < -1.6 - 0.9 - 1.0).all()
     stood = ego.index[(ego["speed"] < 0.1) & (front_x < enter_x) & (front_x > enter_x - 3.0)]
     assert len(stood) > 0  # it stood just before the crossing (stop margin 1 m) ...
     assert front_x.iloc[-1] > 150.0  # ... and drove on once the person had left it
-    assert m["min_gap_vru_m"] > 2.0
+    assert m["min_gap_vru_m"] > 1.0  # the rule's crossing_margin_m beyond the footprint's side
     assert m["crossing_violations"] == 0 and [e["persons"] for e in m["crossing_events"]] == [[]]

@@ -456,3 +456,36 @@ def test_a_person_is_missed_with_its_own_probability():
     visible = len(radar(person_detection_prob=1.0).measure(s, ("ego",)).target)
     assert visible >= 8
     assert 0.4 * visible < np.mean(counts) < 0.6 * visible
+
+
+def _street_snapshot():
+    rows = [EGO, ("car", 30.0, 6.0, 0, 0, 4.0, 1.8), ("walker", 20.0, -6.0, 0, 0, 0.215, 0.478),
+            ("bike", 25.0, 12.0, 0, 0, 1.6, 0.65)]
+    base = snap(rows)
+    return Snapshot(0.0, base.ids, base.pos, base.vel, base.heading, base.length, base.width, base.is_ego,
+                    vclass=("passenger", "passenger", "pedestrian", "bicycle"),
+                    is_person=np.array([False, False, True, False]))
+
+
+def test_returns_of_persons_and_cyclists_are_labelled_and_the_tracker_keeps_the_label():
+    det = radar(person_detection_prob=1.0, memory_s=8.0).measure(_street_snapshot(), ("ego",))
+    labels = dict(zip(det.target, det.vru_mask().tolist()))
+    assert labels == {"car": False, "walker": True, "bike": True}
+    # a world without persons or cyclists: no labels at all (None), every return unlabelled
+    plain = radar().measure(snap([EGO, ("car", 30.0, 6.0, 0, 0, 4.0, 1.8)]), ("ego",))
+    assert plain.vru is None and plain.vru_mask().tolist() == [False]
+    # the memory coasts the walker out of view with its label: the ego turned away, the scan is empty
+    r = Radar(RadarParams(person_detection_prob=1.0, range_sigma_m=0.0, speed_sigma_mps=0.0),
+              np.random.default_rng(0))
+    s0 = _street_snapshot()
+    first = r.objects(r.scan(s0, ("ego",)))
+    turned = Snapshot(0.2, s0.ids, s0.pos, s0.vel, np.array([np.pi, 0, 0, 0]), s0.length, s0.width, s0.is_ego,
+                      vclass=s0.vclass, is_person=s0.is_person)
+    kept = r.objects(r.scan(turned, ("ego",)))
+    assert first.vru_mask().sum() == 2 and kept.n == 3 and kept.vru_mask().sum() == 2
+
+
+def test_a_persons_label_is_missed_with_its_own_probability():
+    r = radar(person_detection_prob=1.0, vru_label_prob=0.5)
+    labelled = [r.measure(_street_snapshot(), ("ego",)).vru_mask().sum() for _ in range(400)]
+    assert 0.9 < np.mean(labelled) < 1.1  # two small targets, each labelled with p = 0.5

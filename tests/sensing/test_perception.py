@@ -1,0 +1,27 @@
+"""Which road users a controller keeps a person's margin to (sensing/perception.obstacle_vehicles)."""
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from sumo_avoid.core.snapshot import Snapshot
+from sumo_avoid.sensing.perception import obstacle_vehicles
+
+
+def test_people_on_sidewalks_and_walking_areas_are_off_the_carriageway():
+    # the ego; a person on a crossing, one on a sidewalk, one waiting on a corner's walking area, a
+    # cyclist on a bike lane, a car
+    ids = ("ego", "on_crossing", "on_sidewalk", "at_corner", "cyclist", "car")
+    n = len(ids)
+    pos = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, -4.0], [12.0, -6.0], [15.0, -2.5], [20.0, 0.0]])
+    s = Snapshot(0.0, ids, pos, np.zeros((n, 2)), np.zeros(n), np.full(n, 4.5), np.full(n, 1.8),
+                 [True] + [False] * (n - 1), vclass=("passenger", "pedestrian", "pedestrian", "pedestrian",
+                                                     "bicycle", "passenger"),
+                 is_person=np.array([False, True, True, True, False, False]),
+                 lane=("E_1", ":J_c0_0", "E_0", ":J_w1_0", "E_bike", "E_1"))
+    obs = SimpleNamespace(snapshot=s, detections=None)
+    *_, vru = obstacle_vehicles(obs, 0, pos[0], 50.0, walkways=frozenset({"E_0", ":J_w1_0"}))
+    assert vru.tolist() == [True, False, False, True, False]
+    *_, vru = obstacle_vehicles(obs, 0, pos[0], 50.0)  # no walkways known: every person and cyclist
+    assert vru.tolist() == [True, True, True, True, False]
