@@ -5,7 +5,9 @@
   unsignalised or their green) with a person on it or about to step onto it
   (:func:`~sumo_avoid.road.crossings.persons_at`, from the persons recorded at the step before), and
   each crossing an ego came to stand on (slower than ``[layers.traffic]`` stop_speed_mps with its
-  footprint's length over the crossing's span on the path: the ego blocks it);
+  footprint's length over the crossing's span on the path) while its people may cross (unsignalised, or
+  their green): the ego blocks it. Standing on it only through their red (a left turn waiting in a
+  junction whose crossing lies at its entry, as SUMO's drivers wait) is an event, not a violation;
 * ``crossing_events``: every entry into a crossing the ego gives way at, judged (ego, crossing, time,
   the persons on it or stepping onto it, violation), and every standing on a crossing.
 """
@@ -44,11 +46,16 @@ def crossing_events(run: RunResult) -> list[dict]:
                     who = sorted(p["id"].astype(str).to_numpy()[on].tolist())
                 out.append({"ego": vid, "crossing": c.crossing, "time_s": float(t[k + 1]), "persons": who,
                             "kind": "entered", "violation": bool(who)})
-            over = (s > c.s_enter_m) & (s - length < c.s_exit_m) & (v < stand)
-            if over.any():
-                j = int(np.flatnonzero(over)[0])
+            over = np.flatnonzero((s > c.s_enter_m) & (s - length < c.s_exit_m) & (v < stand))
+            if len(over):
+                # blocking it while its people may cross (unsignalised, or their green) is the violation;
+                # standing on it through their red (a turn waiting in a small junction) is listed, not counted
+                open_ = next((j for j in over if people_may_cross(c, _signals_at(run.signals, t[j]))), None)
+                j = int(over[0] if open_ is None else open_)
+                open_ = open_ is not None
                 out.append({"ego": vid, "crossing": c.crossing, "time_s": float(t[j]), "persons": [],
-                            "kind": "stood on it", "violation": True})
+                            "kind": "stood on it" if open_ else "stood on it at its people's red",
+                            "violation": bool(open_)})
     return out
 
 

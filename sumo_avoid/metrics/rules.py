@@ -108,7 +108,7 @@ def yield_crossings(run: RunResult) -> list[dict]:
     for vid, task, ego, s in _ego_tracks(run, lambda lk: bool(lk.foes)):
         steps, t = ego["step"].to_numpy(), ego["time_s"].to_numpy()
         for lk in (lk for lk in task.links if lk.foes):
-            k = first_crossing(s, lk.s_stop_m)
+            k = first_crossing(s, lk.yield_line_m)  # a signalised turn gives way at its internal junction
             signals = _signals_at(run.signals, t[k]) if k >= 0 else {}
             if k < 0 or not yields(lk, signals):
                 continue

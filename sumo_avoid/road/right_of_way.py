@@ -66,6 +66,19 @@ class RightOfWay:
         return tuple(self._foe(other, self.via_chain(other), mine) for other in node.getConnections()
                      if other is not conn and not other.getFromLane().getID().startswith(":") and node.forbids(other, conn))
 
+    def first_conflict_m(self, conn) -> float:
+        """Distance along ``conn``'s internal lanes (SUMO lengths) to the first point where a link with
+        priority over it crosses it (nan when none crosses: they only merge, or there are none)."""
+        node = conn.getFrom().getToNode()
+        if not _has_logic(node):
+            return float("nan")
+        mine = self.via_chain(conn)
+        total = float(sum(ln.getLength() for ln in mine))
+        offsets = [_conflict_offset(mine, self.via_chain(o)) for o in node.getConnections()
+                   if o is not conn and not o.getFromLane().getID().startswith(":") and node.forbids(o, conn)]
+        offsets = [x for x in offsets if x < total - 1e-9]
+        return min(offsets) if offsets else float("nan")
+
     def gives_way_to(self, lane, conn) -> bool:
         """Does one of the links from ``lane`` (a sumolib lane into ``conn``'s junction) give way to
         ``conn``? (At an unregulated junction nobody gives way.)"""

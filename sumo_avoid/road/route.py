@@ -53,6 +53,16 @@ class RouteLink:
     oncoming: tuple[OncomingLane, ...] = ()
     leaving: tuple[str, ...] = ()  # the lane bordering the entry edge on each edge leaving the junction the other way
     crossings: tuple[CrossingLink, ...] = ()  # the pedestrian crossings the link passes over (road.crossings)
+    # arc length of SUMO's internal junction on the link (where its internal lane is split: a left turn
+    # waits there for the oncoming traffic), m; nan when the link has none
+    s_wait_m: float = float("nan")
+
+    @property
+    def yield_line_m(self) -> float:
+        """Where the ego gives way to the link's foes: at a signalised link with an internal junction,
+        there (SUMO's drivers enter on green and wait in the junction, and clear it when the light turns
+        and the oncoming traffic stops); else at the stop line."""
+        return self.s_wait_m if self.tls and self.s_wait_m > self.s_stop_m else self.s_stop_m
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,7 @@ from sumo_avoid.road.right_of_way import RightOfWay, link_state
 from sumo_avoid.road.route import LanePiece, OncomingLane, RouteLink
 
 CROSSING_REACH_M = 10.0  # a link's crossings are looked for this far before and after its internal lanes, m
+WAIT_CLEAR_M = 2.0  # a turn waiting inside a junction stops its front this far before the first foe's path, m
 
 
 class RoutePlan(NamedTuple):
@@ -168,13 +169,17 @@ class RoutePlanner:
 
     def _link(self, conn, s_stop_m: float, path: np.ndarray, cum: np.ndarray) -> RouteLink:
         tls = conn.getTLSID() or ""
-        through = sum(v.getLength() for v in self.right_of_way.via_chain(conn))
+        chain = self.right_of_way.via_chain(conn)
+        through = sum(v.getLength() for v in chain)
+        # SUMO's drivers wait inside the junction where the link's internal lane is split (an internal
+        # junction); the ego waits there too, WAIT_CLEAR_M before the first foe's path crosses its own
+        wait = s_stop_m + self.right_of_way.first_conflict_m(conn) - WAIT_CLEAR_M if len(chain) > 1 else float("nan")
         return RouteLink(float(s_stop_m), conn.getFrom().getToNode().getID(), tls,
                          int(conn.getTLLinkIndex()) if tls else -1, link_state(conn), conn.getDirection() or "",
                          self.right_of_way.foes(conn), self._oncoming(conn.getTo(), conn),
                          tuple(o.lane for o in self._oncoming(conn.getFrom())),
                          crossing_links(self._net, conn, path, cum, s_stop_m - CROSSING_REACH_M,
-                                        s_stop_m + through + CROSSING_REACH_M))
+                                        s_stop_m + through + CROSSING_REACH_M), float(wait))
 
     def _oncoming(self, edge, conn=None) -> tuple[OncomingLane, ...]:
         """The lane bordering ``edge`` on every edge that runs the other way between the same two

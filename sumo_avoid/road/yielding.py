@@ -55,6 +55,9 @@ START_MPS = 5.0
 DEPART_S = 5.0
 #: A foe on its way to an all-way stop's line brakes at most this hard (SUMO's default passenger decel), m/s^2.
 FOE_DECEL_MPS2 = 4.5
+#: On yellow a foe that can stop before its line braking at most this stops there (SUMO's drivers stop
+#: when they can at their decel, 4.5 m/s^2 for a passenger car; judged at less, to be sure), m/s^2.
+YELLOW_STOP_DECEL_MPS2 = 3.0
 
 
 def arrival_time(x_m: float, v_mps: float, starting: bool = False) -> float:
@@ -142,9 +145,11 @@ def foe_arrivals(foes: tuple[FoeLink, ...], signals, lanes: dict[str, list[int]]
     who goes first (module docstring); None: every foe there counts."""
     out = []
     for foe in foes:
-        if link_state(signals, foe.tls, foe.link_index, foe.state) in CLOSED:
+        state = link_state(signals, foe.tls, foe.link_index, foe.state)
+        if state in CLOSED:
             continue
         allway = foe.state == "w"
+        yellow = state == "y"
         for lane, offset in foe.approach:
             for r in lanes.get(lane, ()):
                 x = offset - float(lane_pos[r])
@@ -153,6 +158,8 @@ def foe_arrivals(foes: tuple[FoeLink, ...], signals, lanes: dict[str, list[int]]
                 v = float(speed[r])
                 if allway and order is not None and waits_its_turn(x - foe.line_m, x, v, *order, r):
                     continue
+                if yellow and x - foe.line_m > 0.0 and can_give_way(x - foe.line_m, v, YELLOW_STOP_DECEL_MPS2):
+                    continue  # on yellow a foe that can stop at its line comfortably stops (SUMO's drivers do)
                 # at (or just past) its signal's stop line and slow: it is setting off, not cruising
                 starting = allway or (bool(foe.tls) and x - foe.line_m <= AT_LINE_M and v < START_MPS)
                 out.append((arrival_time(x, v, starting), r, x))

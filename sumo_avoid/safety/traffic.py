@@ -173,22 +173,27 @@ class TrafficRulesLayer:
         p = self.p
         for k, link in enumerate(e.task.links):
             d = link.s_stop_m - e.s_m
-            if d <= 0:
+            if d <= 0 and e.s_m >= link.yield_line_m:
                 continue
             if d > p.lookahead_m:
                 break
             late = v * v / (2.0 * p.commit_decel_mps2) > d
-            if k not in e.stopped and link_state(snap.signals, link.tls, link.link_index, link.state) in STOP_SIGNS:
+            if d > 0 and k not in e.stopped and link_state(snap.signals, link.tls, link.link_index, link.state) in STOP_SIGNS:
                 if v < p.stop_speed_mps and d - p.stop_margin_m <= p.stop_zone_m:
                     e.stopped[k] = snap.time_s  # stood at the sign: from now on it only gives way
                 elif not late:
                     return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
             wide = e.wide.get(k)
-            if (wide is not None and not late and
+            if (wide is not None and not late and d > 0 and
                     oncoming_first(wide, e.s_m, lanes, snap.lane_pos, snap.speed) < p.gap_margin_s):
                 return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
             if not link.foes:
                 continue
+            if link.yield_line_m > link.s_stop_m:  # a signalised turn waits at its internal junction
+                d = link.yield_line_m - e.s_m
+                if d <= 0:
+                    continue
+                late = v * v / (2.0 * p.commit_decel_mps2) > d
             if not yields(link, snap.signals) or late:
                 continue  # priority now, or too late to stop: go on
             order = (snap.time_s, e.stopped.get(k, math.inf),  # all-way stops: the ego first stood at its line then
@@ -201,7 +206,7 @@ class TrafficRulesLayer:
                 t_slot = zipper_slot(t_e, arrivals, t_c + p.gap_margin_s, give)
                 return (math.inf, -1.0) if t_slot <= t_e else (max(d - p.stop_margin_m, 0.0) / t_slot, link.s_stop_m)
             if min(arrivals, default=math.inf) < t_e + t_c + p.gap_margin_s:
-                return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
+                return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.yield_line_m
             return math.inf, -1.0  # the nearest yield line ahead is clear: the ones after it wait their turn
         return math.inf, -1.0
 

@@ -21,6 +21,7 @@ from sumo_avoid.road.yielding import (
     critical_gap_s,
     ego_time_to_line,
     foe_arrival,
+    foe_arrivals,
     link_state,
     rows_by_lane,
     stand_run,
@@ -211,3 +212,23 @@ def test_a_slow_foe_at_its_stop_line_is_setting_off():
     assert first("M", 70.0, 2.0) == pytest.approx(15.0)  # 20 m before it: 30 m / 2 m/s
     assert first("M", 88.0, 6.0) == pytest.approx(2.0)  # not slow: 12 m / 6 m/s
     assert first("Z", 88.0, 2.0) == pytest.approx(6.0)  # unsignalised (a zipper): 12 m / 2 m/s
+
+
+def test_on_yellow_a_foe_that_can_stop_comfortably_at_its_line_is_not_waited_for():
+    # the conflict point 20 m past the foe link's stop line; three foes at 12 m/s: 44 m before the line
+    # (stops braking at 1.6 m/s^2), 14 m before it (needs 5.1 m/s^2 > 3: goes on), 5 m past it
+    foe = FoeLink(tls="T", link_index=0, state="o", approach=(("a", 100.0),), line_m=20.0)
+    lanes = {"a": [0, 1, 2]}
+    pos = np.array([100.0 - 64.0, 100.0 - 34.0, 100.0 - 15.0])
+    v = np.full(3, 12.0)
+    go = foe_arrivals((foe,), {"T": "G"}, lanes, pos, v, np.full(3, 4.5), set())
+    assert sorted(r for _, r, _ in go) == [0, 1, 2]
+    yellow = foe_arrivals((foe,), {"T": "y"}, lanes, pos, v, np.full(3, 4.5), set())
+    assert sorted(r for _, r, _ in yellow) == [1, 2]
+    assert foe_arrivals((foe,), {"T": "r"}, lanes, pos, v, np.full(3, 4.5), set()) == []
+
+
+def test_a_signalised_turn_gives_way_at_its_internal_junction():
+    assert RouteLink(100.0, "J", tls="T", link_index=1, state="o", s_wait_m=109.0).yield_line_m == 109.0
+    assert RouteLink(100.0, "J", state="m", s_wait_m=109.0).yield_line_m == 100.0  # unsignalised: the stop line
+    assert RouteLink(100.0, "J", tls="T", link_index=1, state="o").yield_line_m == 100.0  # none (nan)
