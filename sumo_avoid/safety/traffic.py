@@ -32,9 +32,12 @@ Per ego and step, with s the arc length of the ego's front bumper projected on i
   leave APF-SA stalled after being passed.
 
 The command (desired velocity, m/s) keeps its direction; only its length is capped -- except while
-the ego is held at a line (a signal, a yield line, a crossing) below ``HELD_MPS``: then it points along
-the route path at the ego's front, so the ego waits lined up with its lane instead of standing askew,
-half turned into the junction (where its rear blocks the next lane and its corner the sidewalk). The stop
+the ego is held at a signal or a crossing below ``HELD_MPS``: then it points along the route path at
+the ego's front, so the ego waits lined up with its lane instead of standing askew, half turned into
+the junction (where its rear blocks the next lane and its corner the sidewalk). At a yield line it
+keeps the controller's direction: there it waits for a gap, and a car lined up straight needs longer
+to turn into it than the gap acceptance allows for (generated rand03, seed 5: rear-ended after a left
+turn taken from the straight stance). The stop
 line works as a virtual obstacle that no controller can drive through; SPEC §5 hands it to the
 controller as one, which a potential-field controller would also steer around (the departure is
 deliberate: a stop line is not something to swerve past). Counters: ``rules_signal_stops``
@@ -239,12 +242,11 @@ class TrafficRulesLayer:
             cross, cline = self._crossings.cap(e.task, e.s_m, v, snap, int(r), float(snap.length[r]), float(snap.width[r]))
             if cross < v or cross < 0.5:
                 self._crossing_yields.add((vid, cline))
-            give = min(give, cross)
-            cap = min(sig, road, give)
+            cap = min(sig, road, give, cross)
             if speed > cap:
-                self._caps += road < min(sig, give)
+                self._caps += road < min(sig, give, cross)
                 out[i] *= cap / speed
-                if min(sig, give) <= cap and cap < HELD_MPS:
+                if min(sig, cross) <= cap and cap < HELD_MPS:
                     # held at a line: wait lined up with the lane, not already turned into the junction
                     # (a car standing askew at its line blocks the next lane and its corner the sidewalk)
                     out[i] = cap * _direction(e.task.path, e.s_m)
