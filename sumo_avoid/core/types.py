@@ -49,6 +49,7 @@ class Detections:
     target: tuple[str, ...] = field(default=())  # (D,) true target id, "" = false alarm. EVALUATION ONLY
     mount: str = "front"  # which radar: "front" (boresight = heading), "rear" (heading + pi), "left" / "right" (heading + / - pi/2)
     vru: np.ndarray | None = None  # (D,) bool: the return is labelled a person or cyclist (small cross-section); None = none are
+    walkway: np.ndarray | None = None  # (D,) bool: the return lies on a sidewalk or walking area of the map; None = none does
 
     @property
     def n(self) -> int:
@@ -57,6 +58,10 @@ class Detections:
     def vru_mask(self) -> np.ndarray:
         """(D,) bool: returns labelled as a person or cyclist (all False when the scan has no labels)."""
         return np.zeros(self.n, bool) if self.vru is None else self.vru
+
+    def walkway_mask(self) -> np.ndarray:
+        """(D,) bool: returns on a sidewalk or walking area (all False when not known)."""
+        return np.zeros(self.n, bool) if self.walkway is None else self.walkway
 
     def points(self) -> np.ndarray:
         """(D, 2) world positions of the detections, m."""

@@ -30,6 +30,9 @@ from sumo_avoid.road.right_of_way import RightOfWay
 from sumo_avoid.road.route_plan import RoutePlan, RoutePlanner
 
 
+WALKWAY_TOL_M = 0.3  # a point this close to a sidewalk or walking area is on it (Road.on_walkway), m
+
+
 def _offset_left(shape: np.ndarray, dist: float) -> np.ndarray:
     """Polyline offset by ``dist`` to the left of its direction of travel (mitred joins)."""
     if len(shape) < 2:
@@ -176,6 +179,28 @@ class Road:
             self._areas[vclass] = self.area if len(mine) == len(self._lanes_all) else _surface(mine, self._net.getNodes())
         return self._areas[vclass]
 
+    def on_walkway(self, points) -> np.ndarray:
+        """(M,2) points -> (M,) bool: on a sidewalk or walking area (:attr:`RoadElements.walkways`: a
+        lane only people walk on, off the carriageway), or within :data:`WALKWAY_TOL_M` of one (a radar
+        return lies on a person's near side; SUMO stands the people waiting for a crossing on its end,
+        where a rounded corner leaves a few centimetres outside the walking area)."""
+        pts = np.asarray(points, dtype=float).reshape(-1, 2)
+        if "walkway" not in self._areas:
+            polys = []
+            for lane_id in self.elements.walkways:
+                ln = self.elements.lanes[lane_id]
+                shape = np.asarray(ln.shape, float)[:, :2]
+                if ln.function == "walkingarea" and len(shape) >= 3:
+                    polys.append(Polygon(shape).buffer(0))
+                elif len(shape) >= 2:
+                    polys.append(LineString(shape).buffer(0.5 * ln.width_m, cap_style="flat"))
+            area = shapely.union_all(polys).buffer(WALKWAY_TOL_M) if polys else Polygon()
+            shapely.prepare(area)
+            self._areas["walkway"] = area
+        if len(pts) == 0:
+            return np.zeros(0, bool)
+        return np.asarray(shapely.contains_xy(self._areas["walkway"], pts[:, 0], pts[:, 1]), bool)
+
     def segments_near(self, point, radius_m: float, *, with_kind: bool = False):
         """Boundary segments and solid lines within ``radius_m`` of ``point``.
 
@@ -267,5 +292,5 @@ class Road:
 
 @functools.lru_cache(maxsize=16)
 def _load_cached(path: str, mtime_ns: int) -> Road:
-    net = sumolib.net.readNet(path, withInternal=True, withPedestrianConnections=True)
+    net = sumolib.net.readNet(path, withInternal=True, withPedestrianConnections=True, withPrograms=True)
     return Road(net, source=path)

@@ -22,6 +22,8 @@ way to all of them.
 """
 from __future__ import annotations
 
+import numpy as np
+import shapely
 from shapely.geometry import LineString, Point
 
 from sumo_avoid.road.route import FoeLink
@@ -66,18 +68,52 @@ class RightOfWay:
         return tuple(self._foe(other, self.via_chain(other), mine) for other in node.getConnections()
                      if other is not conn and not other.getFromLane().getID().startswith(":") and node.forbids(other, conn))
 
-    def first_conflict_m(self, conn) -> float:
-        """Distance along ``conn``'s internal lanes (SUMO lengths) to the first point where a link with
-        priority over it crosses it (nan when none crosses: they only merge, or there are none)."""
+    def wait_s(self, conn, path, cum, s_stop_m: float, clear_m: float, half_width_m: float) -> float:
+        """Where on the ego's ``path`` (arc lengths ``cum``) a car on ``conn`` waits inside the junction
+        for the links with priority that cross it: the farthest arc length from the stop line on whose
+        pose (on the path, along its tangent) the front corners of a car ``2 half_width_m`` wide stay
+        ``clear_m`` from every such link's path (its internal lanes' centre line) that is farther than that
+        at the stop line (one nearer runs beside the entry, not across the way ahead); nan when none
+        crosses or there is no room past the stop line."""
         node = conn.getFrom().getToNode()
         if not _has_logic(node):
             return float("nan")
         mine = self.via_chain(conn)
         total = float(sum(ln.getLength() for ln in mine))
-        offsets = [_conflict_offset(mine, self.via_chain(o)) for o in node.getConnections()
-                   if o is not conn and not o.getFromLane().getID().startswith(":") and node.forbids(o, conn)]
-        offsets = [x for x in offsets if x < total - 1e-9]
-        return min(offsets) if offsets else float("nan")
+        lines = [_chain_line(self.via_chain(o)) for o in node.getConnections()
+                 if o is not conn and not o.getFromLane().getID().startswith(":") and node.forbids(o, conn)
+                 and _conflict_offset(mine, self.via_chain(o)) < total - 1e-9 and self._ever_together(conn, o)]
+        lines = [ln for ln in lines if ln is not None]
+        if not lines:
+            return float("nan")
+        s = np.arange(s_stop_m, s_stop_m + total, 0.25)
+        x, y = np.interp(s, cum, path[:, 0]), np.interp(s, cum, path[:, 1])
+        tx, ty = np.interp(s + 0.5, cum, path[:, 0]) - x, np.interp(s + 0.5, cum, path[:, 1]) - y
+        n = np.hypot(tx, ty)
+        nx, ny = -ty / np.maximum(n, 1e-9), tx / np.maximum(n, 1e-9)
+        corners = np.column_stack([x + half_width_m * nx, y + half_width_m * ny, x - half_width_m * nx,
+                                   y - half_width_m * ny, x, y]).reshape(-1, 3, 2)
+        pts = shapely.points(corners.reshape(-1, 2))
+        last = len(s) - 1
+        for line in lines:  # a foe whose path already passes within clear_m of the stop line runs beside it
+            d = shapely.distance(line, pts).reshape(-1, 3).min(axis=1)
+            bad = np.flatnonzero(d < clear_m)
+            if len(bad) and bad[0] > 0:
+                last = min(last, int(bad[0]) - 1)
+        return float(s[last]) if last > 0 else float("nan")
+
+    def _ever_together(self, conn, other) -> bool:
+        """May ``other`` be open (not red) while ``conn`` has green, by the net's signal programs? True
+        when not both are on one light or the net has no program for it (it may come from elsewhere)."""
+        tls = conn.getTLSID()
+        if not tls or tls != other.getTLSID():
+            return True
+        programs = self.net.getTLS(tls).getPrograms()
+        if not programs:
+            return True
+        a, b = int(conn.getTLLinkIndex()), int(other.getTLLinkIndex())
+        return any(len(ph.state) > max(a, b) and ph.state[a] in "Gg" and ph.state[b] not in "r"
+                   for prog in programs.values() for ph in prog.getPhases())
 
     def gives_way_to(self, lane, conn) -> bool:
         """Does one of the links from ``lane`` (a sumolib lane into ``conn``'s junction) give way to

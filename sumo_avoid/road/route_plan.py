@@ -14,7 +14,9 @@ from sumo_avoid.road.right_of_way import RightOfWay, link_state
 from sumo_avoid.road.route import LanePiece, OncomingLane, RouteLink
 
 CROSSING_REACH_M = 10.0  # a link's crossings are looked for this far before and after its internal lanes, m
-WAIT_CLEAR_M = 2.0  # a turn waiting inside a junction stops its front this far before the first foe's path, m
+WAIT_CLEAR_M = 1.8  # a turn waiting inside a junction keeps its front corners this far from a crossing foe's
+#: path (its centre line: half a car's width and 0.9 m to spare for the ego's heading, which leads the path), m
+WAIT_HALF_WIDTH_M = 1.0  # ... taken for a car this half wide, m
 
 
 class RoutePlan(NamedTuple):
@@ -172,8 +174,9 @@ class RoutePlanner:
         chain = self.right_of_way.via_chain(conn)
         through = sum(v.getLength() for v in chain)
         # SUMO's drivers wait inside the junction where the link's internal lane is split (an internal
-        # junction); the ego waits there too, WAIT_CLEAR_M before the first foe's path crosses its own
-        wait = s_stop_m + self.right_of_way.first_conflict_m(conn) - WAIT_CLEAR_M if len(chain) > 1 else float("nan")
+        # junction); the ego waits there too, its front corners WAIT_CLEAR_M from the crossing foes' paths
+        wait = (self.right_of_way.wait_s(conn, path, cum, s_stop_m, WAIT_CLEAR_M, WAIT_HALF_WIDTH_M)
+                if len(chain) > 1 else float("nan"))
         return RouteLink(float(s_stop_m), conn.getFrom().getToNode().getID(), tls,
                          int(conn.getTLLinkIndex()) if tls else -1, link_state(conn), conn.getDirection() or "",
                          self.right_of_way.foes(conn), self._oncoming(conn.getTo(), conn),

@@ -18,6 +18,8 @@ from sumo_avoid.road.elements import VRU_CLASSES
 
 ASSUMED_LENGTH_M = 4.5
 ASSUMED_WIDTH_M = 1.8
+#: A return labelled a person or cyclist is a box of a cyclist's size (a person fits in it), m.
+VRU_LENGTH_M, VRU_WIDTH_M = 1.8, 0.8
 #: A return this close (m) across (along) the box's axis from the sensor is taken to lie on the
 #: middle of the box's rear (side) face; farther, on its corner; in between, in proportion.
 FACE_M = 1.0
@@ -90,13 +92,12 @@ def obstacle_vehicles(obs, row: int, q, radius_m: float, walkways=frozenset()):
     return. A person on one of the ``walkways`` (lane ids: sidewalks, walking areas) is off the
     carriageway and not marked (a car passes the people on a sidewalk, or waiting at a corner, at their
     size; SUMO puts the ones waiting at a corner at the kerb's edge, inside a tight turn's margin);
-    the radar does not know where a return stands, so its labelled returns are all marked."""
+    a radar return is placed on the map by the sensor (``Detections.walkway``) and judged the same way."""
     snap = obs.snapshot
     if obs.detections is not None:  # one scan per radar mount (front, rear)
         route = obs.route_heading
         along = None if route is None else float(route[obs.index(snap.ids[row])])
-        parts = [(*perceived_obstacles(d, snap.ids[row], along=along), d.vru_mask()[d.of(snap.ids[row])])
-                 for d in obs.detections]
+        parts = [_obstacles_of(d, snap.ids[row], along) for d in obs.detections]
         return tuple(np.concatenate(x) for x in zip(*parts)) if len(parts) > 1 else parts[0]
     d = np.hypot(*(snap.pos - np.asarray(q, float)).T)
     o = np.flatnonzero((d < radius_m) & (np.arange(snap.n) != row))
@@ -104,6 +105,18 @@ def obstacle_vehicles(obs, row: int, q, radius_m: float, walkways=frozenset()):
     if walkways and vru.any():
         vru &= ~np.array([snap.is_person[i] and snap.lane[i] in walkways for i in o], bool).reshape(len(o))
     return snap.pos[o], snap.heading[o], snap.length[o], snap.width[o], snap.vel[o], vru
+
+
+def _obstacles_of(det, vid: str, along):
+    """One scan's returns of ego ``vid`` as boxes (a car's; a labelled person's or cyclist's
+    :data:`VRU_LENGTH_M` x :data:`VRU_WIDTH_M`) and their VRU marks (not on a walkway)."""
+    k = det.of(vid)
+    pos, hd, ln, wd, vel = perceived_boxes(det, k, along)
+    small = det.vru_mask()[k]
+    if small.any():
+        j = np.flatnonzero(small)
+        pos[j], hd[j], ln[j], wd[j], vel[j] = perceived_boxes(det, k[j], along, VRU_LENGTH_M, VRU_WIDTH_M)
+    return pos, hd, ln, wd, vel, small & ~det.walkway_mask()[k]
 
 
 def radar_obstacles(obs, known_pos, gate_m: float):

@@ -8,11 +8,14 @@ Each is built as ``cls(params, ctx, *, needs_scans, v2v)`` (:class:`sumo_avoid.c
   controllers get the scans plus the tracker's memory of returns out of view (one fused memory for
   all mounts), and the
   traffic's direction at each ego (its route path's nearest segment), along which returns are
-  taken to move (:mod:`.perception`).
+  taken to move (:mod:`.perception`); a return labelled a person or cyclist is placed on the map
+  (``Detections.walkway``: on a sidewalk or walking area), as an ADAS fuses its radar with its map.
 
 Both hand flock members' V2V messages on (:mod:`.v2v`) when the controller needs them.
 """
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 
@@ -77,6 +80,7 @@ class RadarSensor(_Base):
     def __init__(self, params: RadarParams, ctx, *, needs_scans: bool = True, v2v: V2VParams | None = None):
         super().__init__(ctx, v2v)
         self.radars = tuple(Radar(params, ctx.rng(STREAM[m]), mount=m) for m in params.mounts())
+        self.road = getattr(ctx, "road", None)  # the map: where a labelled return stands (sidewalk or road)
         self.front = self.radars[0]  # its tracker is the one memory of all mounts
         self._paths: dict[str, np.ndarray] = {}
         self._seg_key, self._segs = None, None  # route_segments() of the egos in _seg_key
@@ -92,4 +96,6 @@ class RadarSensor(_Base):
             self._seg_key, self._segs = ids, route_segments([self._paths.get(v) for v in ids])
         along = route_directions(None, snap.pos[rows], snap.heading[rows], self._segs)
         seen = self.front.objects(scans, along)  # one fused memory over the mounts; a tuple, like scans
+        if self.road is not None and any(d.vru is not None for d in seen):  # labelled returns placed on the map
+            seen = tuple(d if d.vru is None else replace(d, walkway=self.road.on_walkway(d.points())) for d in seen)
         return Observation(snap, ids, rows, ego_speed, self.obstacles, scans, seen, along, self.v2v)
