@@ -81,6 +81,7 @@ class RoadView:
         self.frame = RouteFrame.from_polyline(task.path)
         self.lanes = RouteLanes(task.lanes) if task.lanes else None
         self.walkways = task.walkways  # people there are off the carriageway: no margin beyond their size
+        self.passing: tuple[float, float] | None = None  # (s_from, s_to): the oncoming lane is the ego's too (a pass)
         # d is measured from the drivable line (core.drivable), not the lane centre, where a turn
         # is tighter than the car's turning radius; elsewhere (and with no radius) they coincide
         self.line = (drivable_line(self.frame, self.lanes.corridor, 0.5 * task.width_m, turn_radius_m)
@@ -122,7 +123,7 @@ class RoadView:
         if self.lanes is None:
             s = np.atleast_1d(np.asarray(s, float))
             return np.full(len(s), -np.inf), np.full(len(s), np.inf)
-        lo, hi = self.lanes.corridor(s)
+        lo, hi = self.lane_bounds(s)
         off = self.line.offset(s)
         lo, hi = lo - off, hi - off
         # where the line swings close to a bound (by plan, to make a tight turn), the bound leaves the
@@ -130,6 +131,16 @@ class RoadView:
         # wide entry, and the car comes out against the oncoming lane at the exit
         wide = np.abs(off) > 1e-9
         return np.where(wide, np.minimum(lo, -self._room), lo), np.where(wide, np.maximum(hi, self._room), hi)
+
+    def lane_bounds(self, s) -> tuple[np.ndarray, np.ndarray]:
+        """The bounds of the ego's lanes at arc lengths s (lane frame), with the oncoming lane while a
+        pass borrows it (:attr:`passing`)."""
+        s = np.atleast_1d(np.asarray(s, float))
+        lo, hi = self.lanes.corridor(s)
+        if self.passing is not None:
+            a, b = self.passing
+            hi = hi + np.where((s >= a) & (s <= b), self.lanes.opposite(s), 0.0)
+        return lo, hi
 
     def lane_centres(self, s: float) -> np.ndarray | None:
         """d of every lane centre of the route's edge at arc length s (by lane index), or None."""
@@ -223,7 +234,7 @@ class RoadView:
             # drivable line's stretch the bound is the line's room (so a car standing at the end of the
             # oncoming lane beside a wide exit is not left out)
             half = 0.5 * (np.abs(np.sin(o_rel)) * o_len + np.abs(np.cos(o_rel)) * o_wid)
-            lo, hi = self.lanes.corridor(os_) if self.lanes is not None else self.corridor(os_)
+            lo, hi = self.lane_bounds(os_) if self.lanes is not None else self.corridor(os_)
             off = self.line.offset(os_)  # where the drivable line swings out, so does the room the car may use
             line_lo, line_hi = self.corridor(os_)
             lo, hi = np.minimum(lo, line_lo + off), np.maximum(hi, line_hi + off)

@@ -80,6 +80,9 @@ class LanePiece:
     offsets_end_m: tuple[float, ...]  # ... at s_end, m
     widths_m: tuple[float, ...]  # lane widths (by lane index), m
     allowed: tuple[bool, ...] = ()  # may the ego's vehicle class use each lane (by lane index)? () = every lane
+    #: width of the oncoming lane beside the edge's leftmost lane (the edge running the other way between
+    #: the same junctions) when the ego's class may use it: the lane an overtaking pass borrows, m; 0 = none
+    opposite_m: float = 0.0
 
     def usable(self) -> np.ndarray:
         """(lanes,) bool: the lanes the ego may use (its own lane always)."""

@@ -64,6 +64,14 @@ class RouteLanes:
         self._lo = np.array([q[1] for q in pts])
         self._hi = np.array([q[2] for q in pts])
         self._widen_s, self._widen_m = _junction_widening(self.pieces)
+        opp = [(q.s_start_m, q.s_end_m, 0.0 if _is_internal(q) else q.opposite_m) for q in self.pieces]
+        self._opp_s = np.maximum.accumulate(np.array([x for a, b, _ in opp for x in (a, b)]) + _EPS * np.arange(2 * n))
+        self._opp_w = np.array([w for _, _, w in opp for _ in (0, 1)])
+
+    def opposite(self, s) -> np.ndarray:
+        """(N,) width of the oncoming lane beside the ego's lanes at arc lengths s (0: none; a
+        junction has none), m."""
+        return np.interp(np.atleast_1d(np.asarray(s, float)), self._opp_s, self._opp_w)
 
     def corridor(self, s) -> tuple[np.ndarray, np.ndarray]:
         """(d_lo (N,), d_hi (N,)): the right and left bounds of the ego's lanes at arc lengths s, m."""

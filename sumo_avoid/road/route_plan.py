@@ -36,6 +36,17 @@ def _lane_centres(lanes) -> tuple[tuple[float, ...], np.ndarray]:
     return tuple(w.tolist()), np.cumsum(w) - 0.5 * w
 
 
+def _opposite_width(e, vclass: str | None) -> float:
+    """Width of the lane beside ``e``'s leftmost one on the edge running the other way between the same
+    junctions, if ``vclass`` may use it (0 otherwise, or when there is no such edge)."""
+    a, b = e.getFromNode(), e.getToNode()
+    for r in b.getOutgoing():
+        if r.getToNode() is a and r.getID() != e.getID() and r.getFunction() == "":
+            lane = max(r.getLanes(), key=lambda ln: ln.getIndex())
+            return float(lane.getWidth()) if vclass is None or lane.allows(vclass) else 0.0
+    return 0.0
+
+
 def _first_allowed(lanes, vclass: str | None) -> int:
     """The lowest lane index ``vclass`` may use (0 without a class, or when it may use none)."""
     ok = [ln.getIndex() for ln in lanes if vclass is None or ln.allows(vclass)]
@@ -84,7 +95,7 @@ class RoutePlanner:
         pieces: list[np.ndarray] = []
         link_at: list[tuple[object, int]] = []  # (connection, points before its stop line)
         limit_at: list[tuple[float, int]] = []  # (speed limit, points before its lane piece)
-        piece_at: list[tuple] = []  # (edge, lane, offsets at start, offsets at end, widths, allowed, points before it)
+        piece_at: list[tuple] = []  # (edge, lane, offsets at start, offsets at end, widths, allowed, opposite width, points before it)
         entry = depart_lane
         for k, e in enumerate(edges):
             nxt = edges[k + 1] if k + 1 < len(edges) else None
@@ -97,7 +108,7 @@ class RoutePlanner:
                 for lane, shape, speed in self._via_lanes(conn):
                     limit_at.append((speed, n_points))
                     piece_at.append((lane.getEdge().getID(), lane.getIndex(), (0.0,), (0.0,),
-                                     (float(lane.getWidth()),), (), n_points))
+                                     (float(lane.getWidth()),), (), 0.0, n_points))
                     pieces.append(shape)
                     n_points += len(shape)
                 entry = conn.getToLane().getIndex()
@@ -137,17 +148,18 @@ class RoutePlanner:
         limit_at.append((float(lanes[exit_idx].getSpeed()), n_points))
         widths, centres = _lane_centres(lanes)
         exit_off = tuple((centres - centres[exit_idx]).tolist())
+        opp = _opposite_width(e, vclass)
         if entry_idx == exit_idx:
             pieces.append(exit_shape)
-            piece_at.append((e.getID(), exit_idx, exit_off, exit_off, widths, allowed, n_points))
+            piece_at.append((e.getID(), exit_idx, exit_off, exit_off, widths, allowed, opp, n_points))
             return
         entry_shape = np.asarray(lanes[entry_idx].getShape(), float)
         s0 = min(0.5 * polyline_length(exit_shape), 60.0)
         cum = _cumlen(exit_shape)
         pieces += [entry_shape[:1], polyline_point_at(exit_shape, s0)[None], exit_shape[cum > s0]]
         piece_at.append((e.getID(), exit_idx, tuple((centres - centres[entry_idx]).tolist()), exit_off, widths,
-                         allowed, n_points))
-        piece_at.append((e.getID(), exit_idx, exit_off, exit_off, widths, allowed, n_points + 2))
+                         allowed, opp, n_points))
+        piece_at.append((e.getID(), exit_idx, exit_off, exit_off, widths, allowed, opp, n_points + 2))
 
     def _plan(self, pieces, link_at, limit_at, piece_at) -> RoutePlan:
         """The path from the laid points (consecutive duplicates dropped) and, at the arc lengths where
@@ -165,8 +177,8 @@ class RoutePlanner:
         limits = np.array([(s_at(n), v) for v, n in limit_at], float).reshape(-1, 2)
         starts = [s_at(n) for *_, n in piece_at]
         ends = starts[1:] + [float(cum[-1])]
-        lane_pieces = tuple(LanePiece(a, max(a, b), edge, lane, o0, o1, w, ok)
-                            for (edge, lane, o0, o1, w, ok, _), a, b in zip(piece_at, starts, ends))
+        lane_pieces = tuple(LanePiece(a, max(a, b), edge, lane, o0, o1, w, ok, opp)
+                            for (edge, lane, o0, o1, w, ok, opp, _), a, b in zip(piece_at, starts, ends))
         return RoutePlan(path, links, limits, lane_pieces)
 
     def _link(self, conn, s_stop_m: float, path: np.ndarray, cum: np.ndarray) -> RouteLink:

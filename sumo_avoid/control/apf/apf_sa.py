@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sumo_avoid.control.apf.apf import ApfDriver, ApfParams
+from sumo_avoid.control.apf.oncoming_pass import ABORT_D_M, RADAR_SIGHT_M, OncomingPass, PassParams
 from sumo_avoid.control.base_controller import BaseController
 from sumo_avoid.control.road_view import FrenetScene, RoadView
 from sumo_avoid.core.config import FieldError, field_doc
@@ -68,6 +69,8 @@ class ApfSaParams:
     reverse_clear_s: float = field_doc(3.0, doc="... plus this times the closing speed (the ego backing, the "
                                                 "other driving on), s")
     escape_margin_m: float = field_doc(0.5, doc="the escape target keeps the car this far from road edges, m")
+    passing: PassParams = field_doc(default_factory=PassParams, inline=True,
+                                    doc="the oncoming-lane pass's keys (control/apf/oncoming_pass.py)")
 
     def __post_init__(self):
         if not 0.0 < self.sa_cooling < 1.0:
@@ -85,12 +88,14 @@ class _EgoState:
     cooldown_until_s: float = -math.inf
     reversing: bool = False
     failures: int = 0  # searches in a row that found no escape (the wait before the next doubles)
+    pass_rear_s: float = math.nan  # while passing: the blocker's rear (s); the pass is called off before it
+    pass_checked_s: float = -math.inf  # when the oncoming lane was last looked at for a pass
 
 
 class ApfSaController(BaseController):
     """The potential field plus a simulated-annealing escape from its local minima, in each ego's route frame."""
 
-    stats_keys = Keys(("sa_escapes", "sa_failed_searches"))  # what stats() writes
+    stats_keys = Keys(("sa_escapes", "sa_failed_searches", "sa_oncoming_passes"))  # what stats() writes
 
     def __init__(self, params: ApfSaParams, ctx):
         super().__init__(params, ctx)
@@ -99,6 +104,8 @@ class ApfSaController(BaseController):
         self.state: dict[str, _EgoState] = {}
         self.escapes = 0
         self.failed_searches = 0
+        self.passer = OncomingPass(params.passing, params.escape_room_m, params.escape_reverse_speed_mps)
+        self.passes = 0
 
     def add_ego(self, task: EgoTask) -> None:
         super().add_ego(task)
@@ -109,9 +116,11 @@ class ApfSaController(BaseController):
         super().remove_ego(vid)
         self.driver.remove_ego(vid)
         self.state.pop(vid, None)
+        self.passer.forget(vid)
 
     def stats(self) -> dict:
-        return {"sa_escapes": self.escapes, "sa_failed_searches": self.failed_searches}
+        return {"sa_escapes": self.escapes, "sa_failed_searches": self.failed_searches,
+                "sa_oncoming_passes": self.passes}
 
     def act(self, obs: Observation) -> np.ndarray:
         p, a, drv = self.p, self.p.apf, self.driver
@@ -125,6 +134,8 @@ class ApfSaController(BaseController):
             task, st, view = self.tasks[vid], self.state[vid], drv.views[vid]
             sc = drv.scene(obs, row, vid)
             speed = float(np.hypot(*sc.vel))
+            if view.passing is not None:
+                self._keep_passing(view, sc, st, obs, row, task)
             if st.escape_offset is not None:
                 self._update_escape(st, sc.d, t)
             st.history.append((t, sc.s))
@@ -146,7 +157,12 @@ class ApfSaController(BaseController):
                          or (speed < 0.5 and math.isfinite(fld.v_safe)))
             if window_full and progress >= p.trap_progress_frac * task.cruise_speed_mps * p.trap_window_s:
                 st.failures = 0  # at cruise progress again (not merely slowed for a bend): a new trap next
-            if (st.escape_offset is None and window_full and slow and stuck_now and t >= st.cooldown_until_s):
+            if (view.passing is None and st.escape_offset is None and window_full and slow and stuck_now
+                    and t >= st.pass_checked_s + 1.0):
+                st.pass_checked_s = t
+                self._try_pass(vid, view, sc, st, obs, row, task)
+            if (st.escape_offset is None and window_full and slow and stuck_now and
+                    (t >= st.cooldown_until_s or (view.passing is not None and st.pass_checked_s == t))):
                 end = self._anneal(view, sc, target)
                 if end is None:
                     self.failed_searches += 1
@@ -165,6 +181,44 @@ class ApfSaController(BaseController):
                 v = self._make_room(st, sc, v, fld.v_safe, sees_behind)
             out[k] = view.to_xy_velocity(sc.s, sc.d, v, drv.step_s)
         return out
+
+    def _oncoming(self, view: RoadView, obs: Observation, row: int, sc: FrenetScene):
+        """A function (s_from, s_far) -> [(s, s_dot)] of the vehicles sensed in the oncoming lane there."""
+        def sensed(s_from: float, s_far: float):
+            keep, view.passing = view.passing, (s_from, s_far)
+            try:
+                wide = view.scene(obs, row, s_far - sc.s + 10.0)
+            finally:
+                view.passing = keep
+            if not len(wide.o_pos):
+                return []
+            _, own_hi = view.corridor(wide.o_pos[:, 0])  # own lanes only (passing restored)
+            half = 0.5 * np.minimum(wide.o_length, wide.o_width)
+            mask = (wide.o_pos[:, 1] - half > own_hi - 0.3) & (wide.o_pos[:, 0] > s_from)
+            return list(zip(wide.o_pos[mask, 0].tolist(), wide.o_vel[mask, 0].tolist()))
+        return sensed
+
+    def _try_pass(self, vid, view, sc, st, obs, row, task) -> None:
+        sight = RADAR_SIGHT_M if obs.detections is not None else math.inf
+        stretch = self.passer.start(vid, view, sc, obs.snapshot.time_s, task, task.cruise_speed_mps, sight,
+                                    self._oncoming(view, obs, row, sc))
+        if stretch is not None:
+            view.passing = stretch
+            st.pass_rear_s = self.passer.blocker(sc)[0]
+            self.passes += 1
+
+    def _keep_passing(self, view, sc, st, obs, row, task) -> None:
+        """End the pass once the ego's rear is past its stretch; call it off while the ego is still in its
+        lane, short of the blocker, and the oncoming lane stops being free for it."""
+        s_to = view.passing[1]
+        done = sc.s - 0.5 * sc.length > s_to
+        if not done and sc.s + 0.5 * sc.length < st.pass_rear_s and abs(sc.d) < ABORT_D_M:
+            t_pass = self.passer.time_to(s_to - sc.s, float(np.hypot(*sc.vel)), task.cruise_speed_mps)
+            reach = s_to - sc.s + self.p.passing.pass_oncoming_mps * (t_pass + self.p.passing.pass_margin_s)
+            done = not self.passer.clear(self._oncoming(view, obs, row, sc)(view.passing[0], sc.s + reach), s_to, t_pass)
+        if done:
+            view.passing = None
+            st.escape_offset, st.held_since_s, st.reversing = None, None, False
 
     def _inside_offset(self, view: RoadView, sc: FrenetScene, end) -> float:
         """The lateral offset the ego follows after an escape search ended at ``end`` = (s, d).

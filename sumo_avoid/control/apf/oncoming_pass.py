@@ -1,0 +1,147 @@
+"""Passing a standing vehicle in the oncoming lane (APF-SA, issue 33): a van delivering in the only car
+lane, a bike lane beside it, the oncoming lane busy now and then.
+
+A trapped APF-SA ego (:mod:`.apf_sa`) searches its escape within its own direction's lanes; where they
+offer none it may borrow the oncoming lane beside them (:attr:`~sumo_avoid.road.route.LanePiece.opposite_m`,
+a lane its class may use) for a pass, as a driver does, when all of this holds:
+
+* the ego stands, held behind what blocks it, which stands (slower than :data:`STAND_MPS`) in its strip
+  within ``pass_look_m``, and has stood there for ``pass_wait_s`` (the ego has been held behind it that
+  long): a delivery, a breakdown;
+* it is no queue: nothing else stands in the ego's strip within ``pass_queue_gap_m`` beyond it, and no
+  junction's stop line of the route lies within that distance of its front (a car waiting at a light
+  or a junction is not passed);
+* the oncoming lane is there for the whole pass, from a car length and ``escape_room_m`` (the room it
+  backs up to) behind the ego to
+  ``pass_return_m`` beyond the blocker's front (SUMO's nets: the edge running the other way between the
+  same junctions; no junction inside the stretch);
+* the oncoming lane is free for the pass: every vehicle the ego senses in it ahead reaches the end of
+  the stretch no sooner than the time the ego needs to drive to it (speeding up at ``pass_accel_mps2``
+  to its cruise speed) plus ``pass_margin_s``, and the ego sees far enough for a car at
+  ``pass_oncoming_mps`` it cannot see yet (a radar sees ``max_range_m``, ground truth everything).
+
+While it passes, the oncoming lane belongs to its corridor (``RoadView.passing``), so the escape search
+and the field use it. The pass ends when the ego's rear is past the stretch; it is called off while the
+ego is still in its own lane (its centre within ``ABORT_D_M`` of the lane's) and an oncoming vehicle
+would reach the stretch's end before it; once it has moved out it completes the pass (half in the
+oncoming lane is the one place not to stop). Driving in the oncoming lane is
+counted by ``wrong_way_m`` like any other.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from sumo_avoid.core.config import field_doc
+from sumo_avoid.core.geometry import footprint_corners
+
+STAND_MPS = 0.5  # a blocker slower than this stands, m/s
+ABORT_D_M = 0.5  # a pass is called off only while the ego's centre is this close to its lane's centre, m
+RADAR_SIGHT_M = 100.0  # how far a radar-driven ego sees the oncoming lane (the radar's default range), m
+
+
+@dataclass(frozen=True)
+class PassParams:
+    """The pass's keys, in ``[controllers.apf_sa]``."""
+
+    pass_oncoming: bool = field_doc(True, doc="pass a standing vehicle in the oncoming lane when it is free "
+                                              "(control/apf/oncoming_pass.py)")
+    pass_wait_s: float = field_doc(8.0, doc="... after being held behind it this long, s")
+    pass_look_m: float = field_doc(25.0, doc="... when it stands this close ahead, m")
+    pass_queue_gap_m: float = field_doc(15.0, doc="... and nothing stands, nor is a stop line, within this of "
+                                                  "its front (no queue), m")
+    pass_return_m: float = field_doc(8.0, doc="the pass ends this far beyond the blocker's front plus a car length, m")
+    pass_accel_mps2: float = field_doc(1.5, positive=True, doc="the ego's speed-up assumed for the pass, m/s^2")
+    pass_margin_s: float = field_doc(3.0, doc="oncoming vehicles reach the pass's end at least this long after "
+                                              "the ego, s")
+    pass_oncoming_mps: float = field_doc(16.7, doc="speed assumed for an oncoming vehicle the ego cannot see yet, m/s")
+
+
+class OncomingPass:
+    """Decides, per ego, when APF-SA borrows the oncoming lane (module doc); holds no state but the
+    blocker's first sighting per ego."""
+
+    def __init__(self, params: PassParams, escape_room_m: float = 12.0, reverse_speed_mps: float = 1.5):
+        """``escape_room_m``, ``reverse_speed_mps``: how far and how fast APF-SA backs up before it
+        drives round a blocker it stands close behind."""
+        self.p = params
+        self.room_m, self.reverse_mps = escape_room_m, reverse_speed_mps
+        self._behind: dict[str, tuple[float, float]] = {}  # vid -> (time first held, blocker's rear s)
+
+    def forget(self, vid: str) -> None:
+        self._behind.pop(vid, None)
+
+    def blocker(self, sc) -> tuple[float, float] | None:
+        """(rear s, front s) of the nearest vehicle standing in the ego's strip within ``pass_look_m``."""
+        if not len(sc.o_pos):
+            return None
+        rel = footprint_corners(sc.o_pos, sc.o_heading, sc.o_length, sc.o_width) - sc.q
+        half = 0.5 * sc.width + 0.3
+        in_strip = (rel[..., 1].max(axis=1) >= -half) & (rel[..., 1].min(axis=1) <= half)
+        ahead = in_strip & (rel[..., 0].min(axis=1) > 0.0) & (rel[..., 0].min(axis=1) < self.p.pass_look_m)
+        standing = np.hypot(sc.o_vel[:, 0], sc.o_vel[:, 1]) < STAND_MPS
+        k = np.flatnonzero(ahead)
+        if not len(k):
+            return None
+        j = k[np.argmin(rel[k, :, 0].min(axis=1))]
+        if not standing[j]:
+            return None
+        rear, front = sc.q[0] + rel[j, :, 0].min(), sc.q[0] + rel[j, :, 0].max()
+        # a queue: something else stands in the strip just beyond it
+        beyond = in_strip & standing & (rel[..., 0].min(axis=1) + sc.q[0] > front) & \
+            (rel[..., 0].min(axis=1) + sc.q[0] < front + self.p.pass_queue_gap_m)
+        return None if beyond.any() else (float(rear), float(front))
+
+    def start(self, vid, view, sc, t: float, task, cruise_mps: float, sight_m: float, oncoming) -> tuple | None:
+        """The stretch (s_from, s_to) to borrow the oncoming lane for now, or None. ``oncoming(s_from,
+        s_to_far)`` returns the (s, s_dot) of the vehicles sensed in the oncoming lane over that range."""
+        p = self.p
+        if not p.pass_oncoming or view.lanes is None or np.hypot(*sc.vel) > 0.3:
+            return None  # decided standing behind it (the time the pass needs is known then)
+        b = self.blocker(sc)
+        if b is None:
+            self._behind.pop(vid, None)
+            return None
+        first = self._behind.get(vid)
+        if first is None or abs(first[1] - b[0]) > 1.0:
+            self._behind[vid] = (t, b[0])
+            return None
+        if t - first[0] < p.pass_wait_s:
+            return None
+        if any(b[1] - 1.0 <= lk.s_stop_m <= b[1] + p.pass_queue_gap_m for lk in task.links):
+            return None  # it waits at a junction
+        # from behind the room the ego backs up to when it stands close behind the blocker (apf_sa._make_room)
+        s_from, s_to = sc.s - sc.length - self.room_m, b[1] + sc.length + p.pass_return_m
+        if float(view.lanes.opposite(np.linspace(s_from, s_to, 24)).min()) <= 0.0:
+            return None
+        # standing close behind it the ego first backs up to escape_room_m (apf_sa._make_room)
+        back = max(self.room_m - (b[0] - sc.s - 0.5 * sc.length), 0.0)
+        t_pass = (back / self.reverse_mps + 2.0 if back > 0 else 0.0) + \
+            self.time_to(s_to - sc.s + back, float(np.hypot(*sc.vel)), cruise_mps)
+        reach = s_to - sc.s + p.pass_oncoming_mps * (t_pass + p.pass_margin_s)
+        if reach > sight_m:
+            return None  # the lane may hold a car it cannot see yet
+        if not self.clear(oncoming(s_from, sc.s + reach), s_to, t_pass):
+            return None
+        return s_from, s_to
+
+    def time_to(self, dist_m: float, v_mps: float, cruise_mps: float) -> float:
+        """Time to drive ``dist_m`` from ``v_mps`` speeding up at ``pass_accel_mps2`` to ``cruise_mps``."""
+        a, d = self.p.pass_accel_mps2, max(dist_m, 0.0)
+        v_top = max(cruise_mps, v_mps)
+        d_acc = (v_top * v_top - v_mps * v_mps) / (2.0 * a)
+        if d <= d_acc:
+            return (-v_mps + math.sqrt(v_mps * v_mps + 2.0 * a * d)) / a
+        return (v_top - v_mps) / a + (d - d_acc) / max(v_top, 1e-6)
+
+    def clear(self, vehicles, s_to: float, t_pass: float) -> bool:
+        """No oncoming vehicle (s, s_dot) reaches ``s_to`` within ``t_pass`` + ``pass_margin_s``."""
+        for s_o, v_o in vehicles:
+            if s_o <= s_to:
+                return False  # already in the stretch
+            closing = max(-v_o, 0.1)
+            if (s_o - s_to) / closing < t_pass + self.p.pass_margin_s:
+                return False
+        return True
