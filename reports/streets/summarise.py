@@ -7,9 +7,15 @@ import sys
 
 import pandas as pd
 
-COLS = ["goal_reached", "collisions", "sumo_ego_collisions", "vru_collisions", "crossing_violations",
-        "red_light_violations", "yield_violations", "forbidden_lane_m", "off_road_m", "wrong_way_m", "phi_wall",
-        "min_gap_vru_m"]
+
+def _row(name: str, g: pd.DataFrame) -> str:
+    gap = g["min_gap_vru_m"].dropna()
+    seeds = ",".join(map(str, sorted(g["seed"])))
+    return (f"| {name} | {seeds} | {int(g['goal_reached'].sum())}/{len(g)} "
+            f"| {int(g['collisions'].sum())} / {int(g['sumo_ego_collisions'].sum())} | {int(g['vru_collisions'].sum())} "
+            f"| {int(g['crossing_violations'].sum())} | {int(g['red_light_violations'].sum())} / "
+            f"{int(g['yield_violations'].sum())} | {g['forbidden_lane_m'].sum():.1f} | {g['off_road_m'].sum():.1f} "
+            f"| {g['wrong_way_m'].sum():.1f} | {g['phi_wall'].max():.2f} | {f'{gap.min():.2f}' if len(gap) else '-'} |")
 
 
 def main(path: str) -> None:
@@ -17,20 +23,10 @@ def main(path: str) -> None:
     df = pd.read_sql("select * from runs", con)
     con.close()
     print("| scenario | seeds | goal | collisions (ours / SUMO's with the ego) | vru_collisions | crossing_violations "
-          "| red light / yield | forbidden_lane_m | off_road_m | max phi_wall, m | min gap to a VRU, m |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+          "| red light / yield | forbidden_lane_m | off_road_m | wrong_way_m | max phi_wall, m | min gap to a VRU, m |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name, g in df.groupby("scenario", sort=False):
-        gap = g["min_gap_vru_m"].dropna()
-        print(f"| {name} | {','.join(map(str, g['seed']))} | {int(g['goal_reached'].sum())}/{len(g)} "
-              f"| {int(g['collisions'].sum())} / {int(g['sumo_ego_collisions'].sum())} | {int(g['vru_collisions'].sum())} "
-              f"| {int(g['crossing_violations'].sum())} | {int(g['red_light_violations'].sum())} / "
-              f"{int(g['yield_violations'].sum())} | {g['forbidden_lane_m'].sum():.1f} | {g['off_road_m'].sum():.1f} "
-              f"| {g['phi_wall'].max():.2f} | {gap.min():.2f} |" if len(gap) else
-              f"| {name} | {','.join(map(str, g['seed']))} | {int(g['goal_reached'].sum())}/{len(g)} "
-              f"| {int(g['collisions'].sum())} / {int(g['sumo_ego_collisions'].sum())} | {int(g['vru_collisions'].sum())} "
-              f"| {int(g['crossing_violations'].sum())} | {int(g['red_light_violations'].sum())} / "
-              f"{int(g['yield_violations'].sum())} | {g['forbidden_lane_m'].sum():.1f} | {g['off_road_m'].sum():.1f} "
-              f"| {g['phi_wall'].max():.2f} | - |")
+        print(_row(name, g))
 
 
 if __name__ == "__main__":
