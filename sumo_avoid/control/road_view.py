@@ -241,8 +241,9 @@ class RoadView:
             keep = (od + half > lo - OUTSIDE_MARGIN_M) & (od - half < hi + OUTSIDE_MARGIN_M)
             os_, od, o_rel, o_len, o_wid, o_vel = os_[keep], od[keep], o_rel[keep], o_len[keep], o_wid[keep], o_vel[keep]
             # a person or cyclist in or at the ego's lanes counts as grown by vru_margin_m all round (one
-            # on the sidewalk beside them is behind the bound, as above: the ego passes it, not crawls)
-            grow = 2.0 * vru_margin_m * vru[keep]
+            # on the sidewalk beside them is behind the bound, as above: the ego passes it, not crawls), a
+            # person on a walkway by its share of it (perception._weight)
+            grow = 2.0 * vru_margin_m * np.asarray(vru, float)[keep]
             o_len, o_wid = o_len + grow, o_wid + grow
             vs, vd = self.frame.velocity_to_frenet(os_, od, o_vel)
             od, o_rel, o_vel = self._from_line(os_, od, o_rel, np.column_stack([vs, vd]))

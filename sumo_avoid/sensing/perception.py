@@ -18,6 +18,8 @@ from sumo_avoid.road.elements import VRU_CLASSES
 
 ASSUMED_LENGTH_M = 4.5
 ASSUMED_WIDTH_M = 1.8
+#: A person on a sidewalk or walking area walking (at least KERB_STAND_MPS) gets this share of the VRU margin.
+KERB_WALKING, KERB_STAND_MPS = 0.5, 0.2
 #: A return labelled a person or cyclist is a box of a cyclist's size (a person fits in it), m.
 VRU_LENGTH_M, VRU_WIDTH_M = 1.8, 0.8
 #: A return this close (m) across (along) the box's axis from the sensor is taken to lie on the
@@ -87,12 +89,12 @@ def obstacle_vehicles(obs, row: int, q, radius_m: float, walkways=frozenset()):
     """Other road users for the ego at snapshot ``row`` as (pos, heading, length, width, vel, vru):
     from the radar when ``obs.detections`` is set (moving along ``obs.route_heading`` of that ego
     if given, see :func:`perceived_boxes`), else ground truth within ``radius_m`` of q. ``vru``
-    (bool) marks the vulnerable road users on the carriageway (a person, a cyclist:
-    :data:`~sumo_avoid.road.elements.VRU_CLASSES`): from ground truth, or the radar's label of the
-    return. A person on one of the ``walkways`` (lane ids: sidewalks, walking areas) is off the
-    carriageway and not marked (a car passes the people on a sidewalk, or waiting at a corner, at their
-    size; SUMO puts the ones waiting at a corner at the kerb's edge, inside a tight turn's margin);
-    a radar return is placed on the map by the sensor (``Detections.walkway``) and judged the same way."""
+    (float, :func:`_weight`) is the share of the controller's VRU margin each one gets: 1 for a person
+    or cyclist (:data:`~sumo_avoid.road.elements.VRU_CLASSES`; from ground truth, or the radar's label
+    of the return) on the carriageway; a person on one of the ``walkways`` (lane ids: sidewalks, walking
+    areas) is off it: half walking, none standing (a car passes the people waiting at a corner at their
+    size; SUMO puts them at the kerb's edge, inside a tight turn's margin); a radar return is placed on
+    the map by the sensor (``Detections.walkway``) and judged the same way."""
     snap = obs.snapshot
     if obs.detections is not None:  # one scan per radar mount (front, rear)
         route = obs.route_heading
@@ -102,9 +104,17 @@ def obstacle_vehicles(obs, row: int, q, radius_m: float, walkways=frozenset()):
     d = np.hypot(*(snap.pos - np.asarray(q, float)).T)
     o = np.flatnonzero((d < radius_m) & (np.arange(snap.n) != row))
     vru = snap.is_person[o] | np.array([snap.vclass[i] in VRU_CLASSES for i in o], bool).reshape(len(o))
-    if walkways and vru.any():
-        vru &= ~np.array([snap.is_person[i] and snap.lane[i] in walkways for i in o], bool).reshape(len(o))
-    return snap.pos[o], snap.heading[o], snap.length[o], snap.width[o], snap.vel[o], vru
+    kerb = np.array([snap.is_person[i] and snap.lane[i] in walkways for i in o], bool).reshape(len(o)) \
+        if walkways and vru.any() else np.zeros(len(o), bool)
+    return snap.pos[o], snap.heading[o], snap.length[o], snap.width[o], snap.vel[o], _weight(vru, kerb, snap.vel[o])
+
+
+def _weight(vru, kerb, vel) -> np.ndarray:
+    """(N,) share of the VRU margin each road user gets: 1 a person or cyclist on the carriageway; on a
+    walkway :data:`KERB_WALKING` walking (it may step off), 0 standing (it waits: the car passes it at its
+    size); 0 anything else."""
+    walking = np.hypot(vel[:, 0], vel[:, 1]) >= KERB_STAND_MPS if len(vel) else np.zeros(0, bool)
+    return np.where(vru, np.where(kerb, np.where(walking, KERB_WALKING, 0.0), 1.0), 0.0)
 
 
 def _obstacles_of(det, vid: str, along):
@@ -116,7 +126,7 @@ def _obstacles_of(det, vid: str, along):
     if small.any():
         j = np.flatnonzero(small)
         pos[j], hd[j], ln[j], wd[j], vel[j] = perceived_boxes(det, k[j], along, VRU_LENGTH_M, VRU_WIDTH_M)
-    return pos, hd, ln, wd, vel, small & ~det.walkway_mask()[k]
+    return pos, hd, ln, wd, vel, _weight(small, det.walkway_mask()[k], vel)
 
 
 def radar_obstacles(obs, known_pos, gate_m: float):

@@ -22,6 +22,11 @@ def test_people_on_sidewalks_and_walking_areas_are_off_the_carriageway():
                  lane=("E_1", ":J_c0_0", "E_0", ":J_w1_0", "E_bike", "E_1"))
     obs = SimpleNamespace(snapshot=s, detections=None)
     *_, vru = obstacle_vehicles(obs, 0, pos[0], 50.0, walkways=frozenset({"E_0", ":J_w1_0"}))
-    assert vru.tolist() == [True, False, False, True, False]
+    assert vru.tolist() == [1.0, 0.0, 0.0, 1.0, 0.0]  # all stand: the ones on walkways get no margin
+    walking = Snapshot(0.0, ids, pos, np.tile([0.0, 1.2], (n, 1)), np.zeros(n), np.full(n, 4.5), np.full(n, 1.8),
+                       [True] + [False] * (n - 1), vclass=s.vclass, is_person=s.is_person, lane=s.lane)
+    *_, vru = obstacle_vehicles(SimpleNamespace(snapshot=walking, detections=None), 0, pos[0], 50.0,
+                                walkways=frozenset({"E_0", ":J_w1_0"}))
+    assert vru.tolist() == [1.0, 0.5, 0.5, 1.0, 0.0]  # walking there: half the margin
     *_, vru = obstacle_vehicles(obs, 0, pos[0], 50.0)  # no walkways known: every person and cyclist
-    assert vru.tolist() == [True, True, True, True, False]
+    assert vru.tolist() == [1.0, 1.0, 1.0, 1.0, 0.0]
