@@ -50,7 +50,9 @@ def crossing_events(run: RunResult) -> list[dict]:
             if len(over):
                 # blocking it while its people may cross (unsignalised, or their green) is the violation;
                 # standing on it through their red (a turn waiting in a small junction) is listed, not counted
-                open_ = next((j for j in over if people_may_cross(c, _signals_at(run.signals, t[j]))), None)
+                # an unsignalised crossing is always its people's; a signalised one: the light at each step
+                open_ = over[0] if not c.tls else next(
+                    (j for j in over if people_may_cross(c, _signals_at(run.signals, t[j]))), None)
                 j = int(over[0] if open_ is None else open_)
                 open_ = open_ is not None
                 out.append({"ego": vid, "crossing": c.crossing, "time_s": float(t[j]), "persons": [],

@@ -80,9 +80,10 @@ class RightOfWay:
             return float("nan")
         mine = self.via_chain(conn)
         total = float(sum(ln.getLength() for ln in mine))
-        lines = [_chain_line(self.via_chain(o)) for o in node.getConnections()
-                 if o is not conn and not o.getFromLane().getID().startswith(":") and node.forbids(o, conn)
-                 and _conflict_offset(mine, self.via_chain(o)) < total - 1e-9 and self._ever_together(conn, o)]
+        chains = [self.via_chain(o) for o in node.getConnections()
+                  if o is not conn and not o.getFromLane().getID().startswith(":") and node.forbids(o, conn)
+                  and self._ever_together(conn, o)]
+        lines = [_chain_line(c) for c in chains if _conflict_offset(mine, c) < total - 1e-9]
         lines = [ln for ln in lines if ln is not None]
         if not lines:
             return float("nan")

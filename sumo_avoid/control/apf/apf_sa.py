@@ -203,8 +203,8 @@ class ApfSaController(BaseController):
         stretch = self.passer.start(vid, view, sc, obs.snapshot.time_s, task, task.cruise_speed_mps, sight,
                                     self._oncoming(view, obs, row, sc))
         if stretch is not None:
-            view.passing = stretch
-            st.pass_rear_s = self.passer.blocker(sc)[0]
+            s_from, s_to, st.pass_rear_s = stretch
+            view.passing = (s_from, s_to)
             self.passes += 1
 
     def _keep_passing(self, view, sc, st, obs, row, task) -> None:

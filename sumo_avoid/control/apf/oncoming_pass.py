@@ -95,7 +95,7 @@ class OncomingPass:
         return None if beyond.any() else (float(rear), float(front))
 
     def start(self, vid, view, sc, t: float, task, cruise_mps: float, sight_m: float, oncoming) -> tuple | None:
-        """The stretch (s_from, s_to) to borrow the oncoming lane for now, or None. ``oncoming(s_from,
+        """The stretch (s_from, s_to) to borrow the oncoming lane for now and the blocker's rear s, or None. ``oncoming(s_from,
         s_to_far)`` returns the (s, s_dot) of the vehicles sensed in the oncoming lane over that range."""
         p = self.p
         if not p.pass_oncoming or view.lanes is None or np.hypot(*sc.vel) > 0.3:
@@ -125,7 +125,7 @@ class OncomingPass:
             return None  # the lane may hold a car it cannot see yet
         if not self.clear(oncoming(s_from, sc.s + reach), s_to, t_pass):
             return None
-        return s_from, s_to
+        return s_from, s_to, b[0]
 
     def time_to(self, dist_m: float, v_mps: float, cruise_mps: float) -> float:
         """Time to drive ``dist_m`` from ``v_mps`` speeding up at ``pass_accel_mps2`` to ``cruise_mps``."""
