@@ -53,6 +53,35 @@ def _first_allowed(lanes, vclass: str | None) -> int:
     return min(ok) if ok else 0
 
 
+def _onward(edges, k: int, arrival_lane: int | None, vclass: str | None) -> tuple[int, ...]:
+    """Lane indices of ``edges[k + 1]`` from which the route goes on without changing lanes: those
+    with a connection ``vclass`` may use to ``edges[k + 2]``, or on the last edge the arrival lane
+    (every lane the class may use without one); () when there is no next edge or no such lane."""
+    if k + 1 >= len(edges):
+        return ()
+    nxt = edges[k + 1]
+    if k + 2 == len(edges):
+        if arrival_lane is not None:
+            return (int(arrival_lane),)
+        return tuple(ln.getIndex() for ln in nxt.getLanes() if vclass is None or ln.allows(vclass))
+    conns = nxt.getConnections(edges[k + 2])
+    return tuple(sorted({c.getFromLane().getIndex() for c in conns
+                         if vclass is None or (c.getFromLane().allows(vclass) and c.getToLane().allows(vclass))}))
+
+
+def _turning(conn, via_lanes) -> float:
+    """Total absolute change of heading, rad, along a connection: from the end of its lane on the
+    incoming edge through its internal lanes ``via_lanes`` to the start of its lane on the outgoing edge."""
+    pts = [np.asarray(conn.getFromLane().getShape(), float)[-2:]]
+    pts += [np.asarray(v.getShape(), float) for v in via_lanes]
+    pts.append(np.asarray(conn.getToLane().getShape(), float)[:2])
+    p = _dedupe(np.concatenate(pts))
+    if len(p) < 3:
+        return 0.0
+    h = np.arctan2(*np.diff(p, axis=0).T[::-1])
+    return float(np.abs((np.diff(h) + np.pi) % (2 * np.pi) - np.pi).sum())
+
+
 def _keep_mask(points: np.ndarray, tol: float = 1e-6) -> np.ndarray:
     """False for a point within ``tol`` of the one before it (consecutive duplicates)."""
     keep = np.ones(len(points), bool)
@@ -99,8 +128,7 @@ class RoutePlanner:
         entry = depart_lane
         for k, e in enumerate(edges):
             nxt = edges[k + 1] if k + 1 < len(edges) else None
-            want_to = arrival_lane if k + 2 == len(edges) else None
-            conn, exit_idx = self._exit(e, nxt, entry, want_to, arrival_lane, vclass)
+            conn, exit_idx = self._exit(e, nxt, entry, _onward(edges, k, arrival_lane, vclass), arrival_lane, vclass)
             self._lay_edge(e, entry, exit_idx, vclass, pieces, piece_at, limit_at)
             if conn is not None:
                 n_points = sum(len(piece) for piece in pieces)
@@ -114,11 +142,12 @@ class RoutePlanner:
                 entry = conn.getToLane().getIndex()
         return self._plan(pieces, link_at, limit_at, piece_at)
 
-    @staticmethod
-    def _exit(e, nxt, entry, want_to, arrival_lane, vclass):
+    def _exit(self, e, nxt, entry, onward, arrival_lane, vclass):
         """(the connection to edge ``nxt`` the path takes, None on the last edge; the lane index it
         leaves ``e`` by): of the connections ``vclass`` may use, the one from the lane nearest the entry
-        lane (towards ``want_to`` on the edge before the last)."""
+        lane; of those, the one into the lane nearest to the lanes ``onward`` of ``nxt`` (those that go on
+        along the route, see :func:`_onward`), then the smoothest (the least turning, :func:`_turning`:
+        where one lane fans out into several, the lane that runs on rather than one reached by a jog)."""
         lanes = e.getLanes()
         if nxt is None:
             exit_idx = arrival_lane if arrival_lane is not None else (entry if entry is not None else
@@ -131,8 +160,8 @@ class RoutePlanner:
             raise ValueError(f"no connection {e.getID()} -> {nxt.getID()}")
         ref = entry if entry is not None else 0
         conn = min(conns, key=lambda c: (abs(c.getFromLane().getIndex() - ref),
-                                         0 if want_to is None else abs(c.getToLane().getIndex() - want_to),
-                                         c.getFromLane().getIndex()))
+                                         min((abs(c.getToLane().getIndex() - i) for i in onward), default=0),
+                                         round(_turning(c, self.right_of_way.via_chain(c)), 3), c.getFromLane().getIndex()))
         return conn, int(np.clip(conn.getFromLane().getIndex(), 0, len(lanes) - 1))
 
     @staticmethod
