@@ -27,7 +27,7 @@ from sumo_avoid.road.elements import read_elements
 from sumo_avoid.road.lane_index import LaneIndex
 from sumo_avoid.road.polyline import polyline_length, polyline_point_at, polyline_project
 from sumo_avoid.road.right_of_way import RightOfWay
-from sumo_avoid.road.route_plan import RoutePlan, RoutePlanner
+from sumo_avoid.road.route_plan import RoutePlan, RoutePlanner, kerb_room
 
 
 WALKWAY_TOL_M = 0.3  # a point this close to a sidewalk or walking area is on it (Road.on_walkway), m
@@ -244,7 +244,10 @@ class Road:
     def route(self, edge_ids, depart_lane: int | None = None, arrival_lane: int | None = None,
               vclass: str | None = None) -> RoutePlan:
         """The route along consecutive normal edges (:meth:`RoutePlanner.route`)."""
-        return self.planner.route(edge_ids, depart_lane, arrival_lane, vclass)
+        plan = self.planner.route(edge_ids, depart_lane, arrival_lane, vclass)
+        if not self.elements.walkways:
+            return plan
+        return plan._replace(lanes=kerb_room(plan, self.on_walkway))
 
 
     # ------------------------------------------------------------------ plotting support

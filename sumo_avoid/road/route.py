@@ -83,6 +83,10 @@ class LanePiece:
     #: width of the oncoming lane beside the edge's leftmost lane (the edge running the other way between
     #: the same junctions) when the ego's class may use it: the lane an overtaking pass borrows, m; 0 = none
     opposite_m: float = 0.0
+    #: inside a junction: the room (right, left) beyond the internal lane's borders before a sidewalk or
+    #: walking area (within the walkway tolerance), the most the corridor may widen there, m; inf = no
+    #: walkway near (and on normal edges)
+    kerb_room_m: tuple[float, float] = (float("inf"), float("inf"))
 
     def usable(self) -> np.ndarray:
         """(lanes,) bool: the lanes the ego may use (its own lane always)."""

@@ -7,7 +7,8 @@ Built from :class:`~sumo_avoid.road.route.LanePiece` records (``EgoTask.lanes``)
 The corridor holds the lanes of the ego's direction only: a two-way road's centre line and the
 edge of the road are its bounds, and inside a junction the internal lane the route takes, widened
 by ``JUNCTION_MARGIN_M`` on each side (a junction is open tarmac; a turning car's corners sweep
-past its lane's width) with ramps of ``JUNCTION_RAMP_M`` at its entry and exit. Lanes that do not
+past its lane's width) with ramps of ``JUNCTION_RAMP_M`` at its entry and exit, but never over the
+kerb of a sidewalk or walking area (:attr:`LanePiece.kerb_room_m`: people walk there). Lanes that do not
 continue the route end in a taper over the last ``TAPER_M`` before the junction (at most half the
 edge), so the bound leads the car into the lane that continues instead of ending in a step.
 The corridor is piecewise linear in s (breakpoints, ``np.interp``).
@@ -64,6 +65,8 @@ class RouteLanes:
         self._lo = np.array([q[1] for q in pts])
         self._hi = np.array([q[2] for q in pts])
         self._widen_s, self._widen_m = _junction_widening(self.pieces)
+        room = np.array([p.kerb_room_m for p in self.pieces], float).reshape(-1, 2)
+        self._kerb = room if np.isfinite(room).any() else None  # (pieces, 2) right, left; None: no walkway near
         opp = [(q.s_start_m, q.s_end_m, 0.0 if _is_internal(q) else q.opposite_m) for q in self.pieces]
         self._opp_s = np.maximum.accumulate(np.array([x for a, b, _ in opp for x in (a, b)]) + _EPS * np.arange(2 * n))
         self._opp_w = np.array([w for _, _, w in opp for _ in (0, 1)])
@@ -76,8 +79,12 @@ class RouteLanes:
     def corridor(self, s) -> tuple[np.ndarray, np.ndarray]:
         """(d_lo (N,), d_hi (N,)): the right and left bounds of the ego's lanes at arc lengths s, m."""
         s = np.atleast_1d(np.asarray(s, float))
-        m = np.interp(s, self._widen_s, self._widen_m, left=0.0, right=0.0) if len(self._widen_s) else 0.0
-        return np.interp(s, self._s, self._lo) - m, np.interp(s, self._s, self._hi) + m
+        m = np.interp(s, self._widen_s, self._widen_m, left=0.0, right=0.0) if len(self._widen_s) else np.zeros(len(s))
+        m_lo = m_hi = m
+        if self._kerb is not None:  # never widened over the kerb of a walkway (LanePiece.kerb_room_m)
+            k = np.clip(np.searchsorted(self._starts, s, side="right") - 1, 0, len(self.pieces) - 1)
+            m_lo, m_hi = np.minimum(m, self._kerb[k, 0]), np.minimum(m, self._kerb[k, 1])
+        return np.interp(s, self._s, self._lo) - m_lo, np.interp(s, self._s, self._hi) + m_hi
 
 
     def lanes_end_s(self, s: float) -> float:

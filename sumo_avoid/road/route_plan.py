@@ -4,6 +4,7 @@ running the other way, the pedestrian crossings), the speed limits and the lane 
 (:mod:`sumo_avoid.road.route`). Built by :meth:`sumo_avoid.road.network.Road.route`."""
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
@@ -17,6 +18,7 @@ CROSSING_REACH_M = 10.0  # a link's crossings are looked for this far before and
 WAIT_CLEAR_M = 1.8  # a turn waiting inside a junction keeps its front corners this far from a crossing foe's
 #: path (its centre line: half a car's width and 0.9 m to spare for the ego's heading, which leads the path), m
 WAIT_HALF_WIDTH_M = 1.0  # ... taken for a car this half wide, m
+KERB_REACH_M = 1.0  # how far beyond an internal lane's borders a walkway is looked for (kerb_room), m
 
 
 class RoutePlan(NamedTuple):
@@ -51,6 +53,36 @@ def _first_allowed(lanes, vclass: str | None) -> int:
     """The lowest lane index ``vclass`` may use (0 without a class, or when it may use none)."""
     ok = [ln.getIndex() for ln in lanes if vclass is None or ln.allows(vclass)]
     return min(ok) if ok else 0
+
+
+def kerb_room(plan: RoutePlan, on_walkway, reach_m: float = KERB_REACH_M, step_m: float = 0.5) -> tuple[LanePiece, ...]:
+    """The plan's lane pieces, each internal one with :attr:`LanePiece.kerb_room_m`: how far beyond its
+    lane's right and left borders the first point ``on_walkway`` ((M,2) -> (M,) bool) lies, sampled every
+    ``step_m`` along the piece and every 5 cm out to ``reach_m`` (the room a junction's corridor may widen
+    into: a car's corner does not cross the kerb into people walking on a corner)."""
+    path, out = plan.path, []
+    cum = _cumlen(path)
+    ts = np.arange(0.0, reach_m + 1e-9, 0.05)
+    for p in plan.lanes:
+        if not p.edge.startswith(":") or p.s_end_m - p.s_start_m <= 0.0:
+            out.append(p)
+            continue
+        s = np.linspace(p.s_start_m, p.s_end_m, max(int((p.s_end_m - p.s_start_m) / step_m) + 2, 2))
+        pts = np.column_stack([np.interp(s, cum, path[:, 0]), np.interp(s, cum, path[:, 1])])
+        ahead = np.column_stack([np.interp(s + 0.25, cum, path[:, 0]), np.interp(s + 0.25, cum, path[:, 1])])
+        behind = np.column_stack([np.interp(s - 0.25, cum, path[:, 0]), np.interp(s - 0.25, cum, path[:, 1])])
+        tan = ahead - behind
+        tan /= np.maximum(np.hypot(tan[:, 0], tan[:, 1]), 1e-9)[:, None]
+        left = np.column_stack([-tan[:, 1], tan[:, 0]])
+        half = 0.5 * p.widths_m[p.lane if len(p.widths_m) > p.lane else 0]  # an internal piece lists its own lane only
+        room = []
+        for side in (-1.0, 1.0):  # right, left
+            probe = pts[:, None, :] + side * (half + ts)[None, :, None] * left[:, None, :]
+            hit = np.asarray(on_walkway(probe.reshape(-1, 2)), bool).reshape(len(s), len(ts))
+            first = np.where(hit.any(axis=1), ts[np.argmax(hit, axis=1)], np.inf)
+            room.append(float(first.min()))
+        out.append(replace(p, kerb_room_m=(room[0], room[1])))
+    return tuple(out)
 
 
 def _onward(edges, k: int, arrival_lane: int | None, vclass: str | None) -> tuple[int, ...]:

@@ -80,3 +80,16 @@ def test_a_car_the_ego_cannot_steer_clear_of_still_blocks(case):
     sc = _waiting_car_scene(o_vel_d=-0.5) if case.startswith("closing") else _waiting_car_scene(lo=-0.5)  # 0.46 - 0.206 - 0.9 = -0.646 < -0.5
     fld = ctl.field(sc, sc.q[None], np.array([185.2, 0.0]))
     assert fld.v_safe == 0.0 and fld.F[0, 0] < 0.0
+
+
+def test_a_field_that_pushes_back_stops_the_car_rather_than_reversing_it():
+    # blocked by a car it cannot steer clear of, the field points back along the road; the actuator would
+    # reverse a standing car towards such a velocity, blind to what is behind (Bologna, front radar: the
+    # ego backed into the car queued behind it), so the command is to stand
+    from sumo_avoid.control.apf.apf import Field
+
+    ctl = _driver()
+    assert ctl.velocity(Field(np.zeros(1), np.array([[-3.0, 1.0]]), 10.0), 13.89).tolist() == [0.0, 0.0]
+    assert ctl.velocity(Field(np.zeros(1), np.array([[0.0, -2.0]]), 10.0), 13.89).tolist() == [0.0, 0.0]
+    forward = ctl.velocity(Field(np.zeros(1), np.array([[2.0, 0.0]]), 10.0), 13.89)
+    assert forward[0] > 0.0 and forward[1] == 0.0

@@ -45,3 +45,26 @@ def test_walkways_are_the_sidewalks_and_corners_not_the_road_or_the_crossings(ro
     # tolerance: a radar return lies on a person's near side)
     pts = np.array([[7.65, -100.0], [4.8, -100.0], [0.0, -18.9], [6.6, -18.2], [6.55, -100.0]])
     assert road.on_walkway(pts).tolist() == [True, False, False, True, True]
+
+
+def test_the_junction_corridor_never_widens_over_a_walkway(road):
+    # through the crossroads and right round its corner: inside the junction the corridor is the internal
+    # lane widened by JUNCTION_MARGIN_M, but not into the walking areas at the corners (people stand there)
+    from sumo_avoid.road.frenet import RouteFrame
+    from sumo_avoid.road.route_lanes import JUNCTION_MARGIN_M, RouteLanes
+
+    for edges, lane in ((["S2C", "C2N"], 1), (["S2C", "C2E"], 1)):
+        plan = road.route(edges, depart_lane=lane, vclass="passenger")
+        inner = [p for p in plan.lanes if p.edge.startswith(":")]
+        # a walking area at the right corner: within the walkway tolerance (0.3 m) of the lane's border
+        assert inner and all(p.kerb_room_m[0] == 0.0 for p in inner)
+        lanes, frame = RouteLanes(plan.lanes), RouteFrame.from_polyline(plan.path)
+        s = np.linspace(inner[0].s_start_m, inner[-1].s_end_m, 40)
+        lo, hi = lanes.corridor(s)
+        assert lo.min() >= -1.6 - 1e-6  # the right bound is the internal lane's own border (3.2 m wide)
+        # 0.1 m beyond it is a walkway somewhere along the junction (what the bound keeps the car from)
+        assert road.on_walkway(frame.to_xy(s, lo - 0.1)).any()
+        # where no walkway is near, the corridor still widens (the left side of the straight route)
+        if edges[1] == "C2N":
+            mid = s[len(s) // 2]
+            assert lanes.corridor([mid])[1][0] - 1.6 == pytest.approx(JUNCTION_MARGIN_M, abs=0.05)

@@ -263,7 +263,8 @@ class ApfDriver:
     def velocity(self, fld: Field, cruise: float, v_road: float = np.inf) -> np.ndarray:
         """(s_dot, d_dot) along F at min(cruise, |F| cruise / F_att_max, v_safe, v_road); forward, the
         direction is kept within ``max_course_deg`` of the road's (the field's sideways pull of a
-        wall its corner touches would otherwise ask a car to turn on the spot)."""
+        wall its corner touches would otherwise ask a car to turn on the spot); a field that points
+        back along the road (F_s <= 0) stops the car."""
         F = fld.F[0]
         mag = np.hypot(*F)
         if mag < 1e-9:
@@ -272,7 +273,10 @@ class ApfDriver:
         speed = min(cruise, mag * cruise / f_max, fld.v_safe, v_road)
         course = np.arctan2(F[1], F[0])
         if F[0] <= 0.0:
-            return speed * np.array([np.cos(course), np.sin(course)])
+            # the field pushes it back: it stands (the actuator would reverse a standing car towards a
+            # desired velocity behind it, blind to what is there: Bologna, radar seed 2, the ego backed
+            # into the car queued behind it); APF-SA backs up only by its own decision, looking behind
+            return np.zeros(2)
         # a car going forward steers at most max_course off the road's direction and moves across
         # it at most at max_lat_speed: a wall a corner touches must not turn it sideways
         course = np.clip(course, -self.max_course, self.max_course)
