@@ -82,14 +82,18 @@ def test_a_car_the_ego_cannot_steer_clear_of_still_blocks(case):
     assert fld.v_safe == 0.0 and fld.F[0, 0] < 0.0
 
 
-def test_a_field_that_pushes_back_stops_the_car_rather_than_reversing_it():
-    # blocked by a car it cannot steer clear of, the field points back along the road; the actuator would
-    # reverse a standing car towards such a velocity, blind to what is behind (Bologna, front radar: the
-    # ego backed into the car queued behind it), so the command is to stand
+def test_a_field_that_pushes_back_reverses_a_standing_car_only_where_it_may():
+    # blocked by a car it cannot steer clear of, the field points back along the road: a moving car brakes
+    # (steering towards it), a standing one reverses towards it (the actuator) -- unless it may not (it does
+    # not see behind, or something is there: Bologna, front radar, the ego backed into the car queued behind)
     from sumo_avoid.control.apf.apf import Field
 
     ctl = _driver()
-    assert ctl.velocity(Field(np.zeros(1), np.array([[-3.0, 1.0]]), 10.0), 13.89).tolist() == [0.0, 0.0]
-    assert ctl.velocity(Field(np.zeros(1), np.array([[0.0, -2.0]]), 10.0), 13.89).tolist() == [0.0, 0.0]
-    forward = ctl.velocity(Field(np.zeros(1), np.array([[2.0, 0.0]]), 10.0), 13.89)
+    back_left = Field(np.zeros(1), np.array([[-3.0, 1.0]]), 10.0)
+    speed = min(13.89, np.hypot(-3.0, 1.0) * 13.89 / (ctl.p.k_att * ctl.p.d_att_m), 10.0)  # along F
+    along = speed * np.array([-3.0, 1.0]) / np.hypot(-3.0, 1.0)
+    assert ctl.velocity(back_left, 13.89, speed_mps=0.0, may_reverse=True) == pytest.approx(along)
+    assert ctl.velocity(back_left, 13.89, speed_mps=5.0, may_reverse=False) == pytest.approx(along)  # moving: brakes
+    assert ctl.velocity(back_left, 13.89, speed_mps=0.2, may_reverse=False).tolist() == [0.0, 0.0]
+    forward = ctl.velocity(Field(np.zeros(1), np.array([[2.0, 0.0]]), 10.0), 13.89, speed_mps=0.0, may_reverse=False)
     assert forward[0] > 0.0 and forward[1] == 0.0

@@ -81,6 +81,10 @@ class ApfParams:
     curve_decel_mps2: float = field_doc(3.0, doc="speed for the road ahead: braking before a bend, m/s^2")
 
 
+#: Standing: the kinematic actuator reverses a car this slow whose command lies behind it, m/s.
+STANDING_MPS = 0.3
+
+
 @dataclass(frozen=True)
 class Field:
     """Potential and force at candidate ego positions (C of them), plus the governor's speed."""
@@ -260,11 +264,13 @@ class ApfDriver:
         free = np.maximum(gap - self.p.gov_standstill_m, 0.0)
         return float(min(np.sqrt(v_lead**2 + 2.0 * self.p.gov_decel_mps2 * free).min(), v_squeeze))
 
-    def velocity(self, fld: Field, cruise: float, v_road: float = np.inf) -> np.ndarray:
+    def velocity(self, fld: Field, cruise: float, v_road: float = np.inf, speed_mps: float = np.inf,
+                 may_reverse: bool = True) -> np.ndarray:
         """(s_dot, d_dot) along F at min(cruise, |F| cruise / F_att_max, v_safe, v_road); forward, the
         direction is kept within ``max_course_deg`` of the road's (the field's sideways pull of a
         wall its corner touches would otherwise ask a car to turn on the spot); a field that points
-        back along the road (F_s <= 0) stops the car."""
+        back along the road (F_s <= 0) is followed (a moving car brakes; a standing one reverses) except by a
+        car standing (``speed_mps``) that may not reverse (``may_reverse``): it stands."""
         F = fld.F[0]
         mag = np.hypot(*F)
         if mag < 1e-9:
@@ -273,10 +279,12 @@ class ApfDriver:
         speed = min(cruise, mag * cruise / f_max, fld.v_safe, v_road)
         course = np.arctan2(F[1], F[0])
         if F[0] <= 0.0:
-            # the field pushes it back: it stands (the actuator would reverse a standing car towards a
-            # desired velocity behind it, blind to what is there: Bologna, radar seed 2, the ego backed
-            # into the car queued behind it); APF-SA backs up only by its own decision, looking behind
-            return np.zeros(2)
+            # the field pushes it back: moving, the car brakes (and steers towards it); standing, the
+            # actuator would reverse it towards it -- only where it may (``may_reverse``: it sees behind
+            # and nothing is there; a front radar alone does not see the car queued behind it, Bologna)
+            if not may_reverse and speed_mps <= STANDING_MPS:
+                return np.zeros(2)
+            return speed * np.array([np.cos(course), np.sin(course)])
         # a car going forward steers at most max_course off the road's direction and moves across
         # it at most at max_lat_speed: a wall a corner touches must not turn it sideways
         course = np.clip(course, -self.max_course, self.max_course)

@@ -176,7 +176,8 @@ class ApfSaController(BaseController):
                     st.held_since_s, st.escape_err_m = None, math.inf
                     target = drv.carrot(view, sc, st.escape_offset)
                     fld = drv.field(sc, sc.q[None, :], target)
-            v = drv.velocity(fld, task.cruise_speed_mps, v_road)
+            v = drv.velocity(fld, task.cruise_speed_mps, v_road, float(np.hypot(*sc.vel)),
+                             may_reverse=sees_behind and self._clear_behind(sc))
             if st.escape_offset is not None:
                 v = self._make_room(st, sc, v, fld.v_safe, sees_behind)
             out[k] = view.to_xy_velocity(sc.s, sc.d, v, drv.step_s)
