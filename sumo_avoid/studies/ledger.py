@@ -49,10 +49,11 @@ _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 EXPORT_SUFFIXES = (".csv", ".parquet")
 
 
-def check(path, flag: str = "--ledger", new_ok: bool = True) -> None:
+def check(path, flag: str = "--ledger", new_ok: bool = True, needs=()) -> None:
     """``path`` is a ledger, or (``new_ok``: one to write) a file that can be created, not named like its
     exports (.csv, .parquet): not a folder, not a file of another kind, not a SQLite database of
-    something else. Raises ScenarioError naming ``flag``."""
+    something else; an existing one has the columns ``needs``. Raises ScenarioError naming ``flag``
+    (the ledger and its missing columns)."""
     path = pathlib.Path(path)
     check_out_file(path, flag)
     if new_ok and path.suffix.lower() in EXPORT_SUFFIXES:  # a ledger to write: export() would overwrite it
@@ -71,6 +72,10 @@ def check(path, flag: str = "--ledger", new_ok: bool = True) -> None:
     if (tables or not new_ok) and not {"key", "status"} <= cols:
         raise ScenarioError(CL, flag, "a ledger (a SQLite file with a table 'runs' of sumo-avoid runs), not another "
                             f"database (tables: {sorted(tables)})", str(path))
+    missing = [c for c in needs if c not in cols]
+    if cols and missing:
+        raise ScenarioError(str(path), "runs", f"a ledger table with the columns {', '.join(needs)} (missing: "
+                            f"{', '.join(missing)})", show_got=False)
 
 
 def connect(path) -> sqlite3.Connection:

@@ -22,6 +22,8 @@ import numpy as np
 
 from sumo_avoid.core.snapshot import Snapshot
 from sumo_avoid.core.types import EgoTask
+from sumo_avoid.sumo.console import first_error, native_stderr_kept
+from sumo_avoid.sumo.inputs import FLOCK_MAX_SPEED_MPS
 from sumo_avoid.sumo.placement import RoutePlacement
 from sumo_avoid.sumo.ssm_device import SsmRequest, equip, ssm_args
 
@@ -98,12 +100,16 @@ class SumoSim:
     def __init__(self, args: list[str]):
         if libsumo.isLoaded():
             raise RuntimeError("a libsumo simulation is already running in this process")
-        try:
-            libsumo.start(args)
-        except Exception as e:  # libsumo raises TraCIException / FatalTraCIError on bad input
-            if libsumo.isLoaded():
-                libsumo.close()
-            raise SumoStartError(" ".join(str(e).split())) from None
+        with native_stderr_kept() as said:
+            try:
+                libsumo.start(args)
+                refused = None
+            except Exception as e:  # libsumo raises TraCIException / FatalTraCIError on bad input
+                refused = e
+                if libsumo.isLoaded():
+                    libsumo.close()
+        if refused is not None:  # SUMO's own first error line says why ("Process Error" is all libsumo says)
+            raise SumoStartError(first_error("".join(said)) or " ".join(str(refused).split())) from None
         self.step_s = libsumo.simulation.getDeltaT()
         libsumo.simulation.subscribe(list(_SIM_VARS))
         self._dims: dict[str, tuple[float, float]] = {}  # id -> (length, width), static
@@ -300,7 +306,7 @@ class SumoSim:
             libsumo.vehicletype.copy("DEFAULT_VEHTYPE", type_id)
             libsumo.vehicletype.setLength(type_id, float(length_m))
             libsumo.vehicletype.setWidth(type_id, float(width_m))
-            libsumo.vehicletype.setMaxSpeed(type_id, 50.0)
+            libsumo.vehicletype.setMaxSpeed(type_id, FLOCK_MAX_SPEED_MPS)
             libsumo.vehicletype.setMinGap(type_id, 0.0)
         edge = next(e for e in libsumo.edge.getIDList() if not e.startswith(":"))
         route_id = f"__{type_id}_route"
