@@ -9,6 +9,7 @@ crashed (SUMO died or raised mid-run); 130 interrupted.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import datetime
 import json
 import pathlib
@@ -103,7 +104,8 @@ def cmd_run(args) -> int:
                      "controller": scn.spec.ego.controller}, indent=2, sort_keys=True) + "\n")
     except BaseException:  # nothing half-written: what this run put into --out goes, and the folders it made
         for f in kept:
-            f.unlink(missing_ok=True)
+            with contextlib.suppress(OSError):  # e.g. on a file system that turned read-only
+                f.unlink()
         files.remove_dirs(made)
         raise
     if res.bad_input is not None:  # input SUMO refused only once it ran: nothing written

@@ -42,6 +42,8 @@ def from_os(e: BaseException, path) -> OutputError:
     target (a copy's or rename's destination, an open's file), else ``path``."""
     if isinstance(e, OutputError):
         return e
+    if isinstance(e, sqlite3.DatabaseError) and not pathlib.Path(path).exists():  # SQLite says "disk I/O error"
+        return vanished(path)
     named = (getattr(e, "filename2", None) or getattr(e, "filename", None)) if isinstance(e, OSError) else None
     return OutputError(named if isinstance(named, (str, pathlib.PurePath)) else path, reason(e))
 
@@ -51,11 +53,15 @@ def from_errno(code: int, path) -> OutputError:
 
 
 @contextlib.contextmanager
-def writing(path):
-    """Inside the block, an OSError or a SQLite error is raised as an :class:`OutputError` (:func:`from_os`)."""
+def writing(path, discard: bool = False):
+    """Inside the block, an OSError or a SQLite error is raised as an :class:`OutputError` (:func:`from_os`);
+    ``discard``: the file ``path`` is removed then (nothing half-written is left)."""
     try:
         yield
     except (OSError, sqlite3.DatabaseError) as e:
+        if discard:
+            with contextlib.suppress(OSError):
+                pathlib.Path(path).unlink()
         raise from_os(e, path) from None
 
 

@@ -49,7 +49,7 @@ def flocking_record(res: RunResult, job: RunJob, out_dir: pathlib.Path) -> dict:
     m = FlockingOrder().compute(res)
     m["collisions"] = int(len(basic.collision_events(res.traj)))
     if p["figure"]:
-        with writing(p["figure"]):  # a full disk, a read-only or vanished folder: one line naming the figure
+        with writing(p["figure"], discard=True):  # a full disk, a read-only or vanished folder: one line
             plot_arena(res, pathlib.Path(p["figure"]), f"v_flock = {p['v']} m/s · seed {job.seed} · "
                        f"N = {p['agents']} · {p['duration']:.0f} s · μ = {m['mu']:.3f}")
     keep = {k: m.get(k) for k in (*PAPER, *EXTRA) if k in m}
