@@ -193,7 +193,7 @@ def _cmd(args) -> int:
         print(f"sumo-avoid: error: {e}", file=sys.stderr)
         return 1
     except BaseException:
-        remove_dirs(made)
+        remove_dirs([*made, (args.out or ROOT / "reports" / "table4") / "runs"])  # those still empty
         raise
     for r in rows:
         if r["metric"] in ("mu", "v_vel"):

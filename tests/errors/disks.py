@@ -22,6 +22,7 @@ import sys
 import threading
 import time
 
+import matplotlib.font_manager  # noqa: F401 - matplotlib's font cache made here, not by a command under a limit
 import pytest
 
 
