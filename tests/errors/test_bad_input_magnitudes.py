@@ -37,13 +37,12 @@ def _ledger_without(tmp, columns: str) -> Call:
     return Call(["report", led, "--out", tmp / "r.html"], (f"{led}: key 'runs'",), cwd=tmp)
 
 
+# (the key the line names, the [arena] table's lines)
+ABSURD = (("size_m", "size_m = 1e300"), ("size_m", "size_m = 1e7"), ("origin", "origin = [1e300, 0.0]"),
+          ("starts", "n_agents = 1\nstarts = [[0.0, -1e300]]"), ("length_m", "length_m = 1e300"),
+          ("initial_speed_mps", "initial_speed_mps = 1e300"))
 CASES = {
-    "arena_size_1e300": scenario(base("[arena]\nsize_m = 1e300"), "arena.size_m"),
-    "arena_size_1e7": scenario(base("[arena]\nsize_m = 1e7"), "arena.size_m"),
-    "arena_origin_1e300": scenario(base("[arena]\norigin = [1e300, 0.0]"), "arena.origin"),
-    "arena_starts_minus_1e300": scenario(base("[arena]\nn_agents = 1\nstarts = [[0.0, -1e300]]"), "arena.starts"),
-    "arena_length_1e300": scenario(base("[arena]\nlength_m = 1e300"), "arena.length_m"),
-    "arena_speed_1e300": scenario(base("[arena]\ninitial_speed_mps = 1e300"), "arena.initial_speed_mps"),
+    **{f"arena_{i}_{key}": scenario(base(f"[arena]\n{lines}"), f"arena.{key}") for i, (key, lines) in enumerate(ABSURD)},
     "additional_sumo_refuses": _sumo_refuses("sim.additional[0]", "a.add.xml", POLY,
                                              "Attribute 'shape' in definition of poly 'p' is not a valid list of "
                                              "positions."),
