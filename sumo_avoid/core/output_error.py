@@ -42,7 +42,7 @@ def from_os(e: BaseException, path) -> OutputError:
     target (a copy's or rename's destination, an open's file), else ``path``."""
     if isinstance(e, OutputError):
         return e
-    if isinstance(e, sqlite3.DatabaseError) and not pathlib.Path(path).exists():  # SQLite says "disk I/O error"
+    if isinstance(e, sqlite3.OperationalError) and not pathlib.Path(path).exists():  # SQLite says "disk I/O error"
         return vanished(path)
     named = (getattr(e, "filename2", None) or getattr(e, "filename", None)) if isinstance(e, OSError) else None
     return OutputError(named if isinstance(named, (str, pathlib.PurePath)) else path, reason(e))
@@ -58,7 +58,7 @@ def writing(path, discard: bool = False):
     ``discard``: the file ``path`` is removed then (nothing half-written is left)."""
     try:
         yield
-    except (OSError, sqlite3.DatabaseError) as e:
+    except (OSError, sqlite3.OperationalError) as e:  # SQLite's full disk, read-only file, I/O error
         if discard:
             with contextlib.suppress(OSError):
                 pathlib.Path(path).unlink()

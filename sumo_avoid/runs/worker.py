@@ -118,8 +118,8 @@ def run_one(job: RunJob, root: str, timeout_s: float, start: str | None = None) 
     final = root_p / job.key[:16]
     try:
         with writing(tmp):
-            tmp.parent.mkdir(exist_ok=True)  # in the existing root: a root that vanished is not made again
-            tmp.mkdir()
+            for d in (root_p, tmp.parent, tmp):  # no parents: a folder above ``root`` that vanished is not made again
+                d.mkdir(exist_ok=True)
         res = run_in(tmp, job, timeout_s, start)
         if res.unwritable is None:
             with writing(tmp / "result.json"):

@@ -85,6 +85,13 @@ def sumo_args(net: pathlib.Path, routes, additional, step_s: float, seed: int, l
     return args
 
 
+def start_error(first: str, libsumo_says: str) -> str:
+    """Why SUMO would not start: its first error line, and libsumo's message where that says more."""
+    if not first or libsumo_says in (first, "", "Process Error"):
+        return first or libsumo_says
+    return f"{first}; {libsumo_says}"
+
+
 class SumoStartError(RuntimeError):
     """SUMO refused to load the network, routes or additional files."""
 
@@ -108,8 +115,8 @@ class SumoSim:
                 refused = e
                 if libsumo.isLoaded():
                     libsumo.close()
-        if refused is not None:  # SUMO's own first error line says why ("Process Error" is all libsumo says)
-            raise SumoStartError(first_error("".join(said)) or " ".join(str(refused).split())) from None
+        if refused is not None:  # SUMO's own first error line says why (libsumo's may say only "Process Error")
+            raise SumoStartError(start_error(first_error("".join(said)), " ".join(str(refused).split()))) from None
         self.step_s = libsumo.simulation.getDeltaT()
         libsumo.simulation.subscribe(list(_SIM_VARS))
         self._dims: dict[str, tuple[float, float]] = {}  # id -> (length, width), static

@@ -24,7 +24,7 @@ def _sumo_refuses(key: str, name: str, text: str, reason: str) -> Case:
 
     def make(tmp):
         call = case.make(tmp)
-        return Call(call.argv, (*call.names, f"a file SUMO can load: {tmp / name} (SUMO: {reason})"), call.cwd)
+        return Call(call.argv, (*call.names, f"a file SUMO can load: {tmp / name} (SUMO: {reason}"), call.cwd)
     return Case(case.family, make, case.sub)
 
 
