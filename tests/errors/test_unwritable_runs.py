@@ -5,8 +5,10 @@ every row it had). Real libsumo runs on the overtaking scenario, each command in
 (disks.py: the mechanisms, skipped with the reason where one is not available)."""
 from __future__ import annotations
 
+import sqlite3
+
 import pytest
-from conftest import OVERTAKING
+from conftest import OVERTAKING, cli_in_process
 from disks import cli, files_under, one_line, remove, tmpfs, when_made  # noqa: F401 (tmpfs: a fixture)
 
 from sumo_avoid.studies import ledger
@@ -64,6 +66,34 @@ def test_batch_on_a_full_disk_keeps_every_recorded_row(tmp_path):
     one_line(r, "cannot write ", str(led.parent / "runs"), "trajectories.csv", TOO_LARGE)
     assert ledger.row_hashes(led) == rows  # seed 1 kept as it was, seeds 2 and 3 not recorded
     assert files_under(led.parent / "runs") == runs  # no folder of seed 2 or 3, nothing in runs/.tmp
+
+
+def test_batch_whose_ledger_folder_fills_up(tmp_path, tmpfs):
+    led = tmpfs.path / "ledger.sqlite"
+    rows, runs = _recorded(tmp_path, led, *SHORT)
+    tmpfs.fill()
+    r = cli("batch", OVERTAKING, "--seeds", "1-2", *SHORT, "--ledger", led, "--workers", "1", cwd=tmp_path)
+    one_line(r, f"cannot write {tmpfs.path / 'runs'}", NO_SPACE)
+    assert ledger.row_hashes(led) == rows and files_under(tmpfs.path / "runs") == runs
+
+
+def test_batch_whose_ledger_fills_up_mid_batch_keeps_the_rows_before(tmp_path, monkeypatch):
+    """SQLite's own full disk, on the second row (a real one is a matter of page sizes and WAL frames)."""
+    led, calls = tmp_path / "led" / "ledger.sqlite", []
+    full = sqlite3.OperationalError("database or disk is full")
+
+    def record(*a):
+        calls.append(1)
+        if len(calls) == 2:
+            raise full
+        return real(*a)
+    real = ledger._record
+    monkeypatch.setattr(ledger, "_record", record)
+    r = cli_in_process("batch", OVERTAKING, "--seeds", "1-3", *SHORT, "--ledger", led, "--workers", "1", cwd=tmp_path)
+    one_line(r, f"cannot write {led.absolute()}: database or disk is full")
+    monkeypatch.undo()
+    assert len(ledger.row_hashes(led)) == 1 and len(calls) == 2  # the first row kept, the third run never recorded
+    assert {f.split("/")[0] for f in files_under(led.parent / "runs")} == {ledger.read(led)["key"][0][:16]}
 
 
 def test_batch_whose_ledger_folder_is_read_only(tmp_path, tmpfs):
