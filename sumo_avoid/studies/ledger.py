@@ -55,7 +55,8 @@ def check(path, flag: str = "--ledger", new_ok: bool = True, needs=()) -> None:
     something else; an existing one has the columns ``needs``. Raises ScenarioError naming ``flag``
     (the ledger and its missing columns)."""
     path = pathlib.Path(path)
-    check_out_file(path, flag)
+    if new_ok:  # one to write; one only read may lie in a read-only folder
+        check_out_file(path, flag)
     if new_ok and path.suffix.lower() in EXPORT_SUFFIXES:  # a ledger to write: export() would overwrite it
         raise ScenarioError(CL, flag, "a ledger name not ending in .csv or .parquet (the ledger's CSV and Parquet "
                             "exports are written beside it with those suffixes), e.g. runs.sqlite", str(path))

@@ -13,11 +13,13 @@ folders written by ``sumo-avoid run`` (each with ``metrics.json``), or one such 
 from __future__ import annotations
 
 import base64
+import contextlib
 import datetime
 import html
 import io
 import json
 import pathlib
+import tempfile
 import types
 
 import pandas as pd
@@ -192,10 +194,9 @@ def trajectory_png(row, base: pathlib.Path) -> str | None:
     net = row.get("net_file")
     if not (d / "trajectories.csv").is_file() or not isinstance(net, str) or not pathlib.Path(net).is_file():
         return None
-    out = d / "trajectory.png"
-    plot_trajectories(Road.from_net_file(net), pd.read_csv(d / "trajectories.csv"), out,
-                      title=f"{row['scenario']} · {row['controller']} · seed {row['seed']}")
-    return _png_file(out)
+    return _drawn(d / "trajectory.png", lambda out: plot_trajectories(
+        Road.from_net_file(net), pd.read_csv(d / "trajectories.csv"), out,
+        title=f"{row['scenario']} · {row['controller']} · seed {row['seed']}"))
 
 
 def timeseries_png(row, base: pathlib.Path) -> str | None:
@@ -207,10 +208,23 @@ def timeseries_png(row, base: pathlib.Path) -> str | None:
         return _png_file(d / "timeseries.png")
     if not (d / "trajectories.csv").is_file():
         return None
-    out = d / "timeseries.png"
-    plot_timeseries(series(types.SimpleNamespace(traj=pd.read_csv(d / "trajectories.csv"))), out,
-                    title=f"{row['scenario']} · {row['controller']} · seed {row['seed']}")
-    return _png_file(out)
+    return _drawn(d / "timeseries.png", lambda out: plot_timeseries(
+        series(types.SimpleNamespace(traj=pd.read_csv(d / "trajectories.csv"))), out,
+        title=f"{row['scenario']} · {row['controller']} · seed {row['seed']}"))
+
+
+def _drawn(cache: pathlib.Path, draw) -> str:
+    """A plot drawn into the run's folder (kept for the next report), or, where that folder cannot be
+    written (read-only, full), into a temporary folder: the report needs no write beside the ledger."""
+    try:
+        draw(cache)
+        return _png_file(cache)
+    except OSError:  # a half-drawn file would be taken for the plot next time
+        with contextlib.suppress(OSError):
+            cache.unlink(missing_ok=True)
+    with tempfile.TemporaryDirectory(prefix="sumo-avoid-report-") as tmp:
+        draw(pathlib.Path(tmp) / cache.name)
+        return _png_file(pathlib.Path(tmp) / cache.name)
 
 
 def _fmt(v) -> str:

@@ -89,3 +89,18 @@ def test_tune_whose_folder_vanishes(tmp_path):
             during=when_made(out / "ledger.sqlite", remove(out)))
     one_line(r, f"cannot write {out}", GONE)
     assert not out.exists()
+
+
+def test_report_of_a_ledger_in_a_read_only_folder_draws_its_plots_elsewhere(tmp_path, tmpfs):
+    """Runs without plots: the report draws them, into the run's folder where it can (kept), else elsewhere."""
+    led = tmpfs.path / "ledger.sqlite"
+    r = cli("batch", OVERTAKING, "--seeds", "1", "--set", "sim.duration_s=3", "--set", "output.plots=false",
+            "--ledger", led, "--workers", "1", "--quiet", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    tmpfs.read_only()
+    before = files_under(tmpfs.path)
+    r = cli("report", led, "--out", tmp_path / "r.html", cwd=tmp_path)
+    assert r.returncode == 0 and r.stderr == "", r.stderr
+    page = (tmp_path / "r.html").read_text()
+    assert '<img alt="trajectory overtaking' in page and '<img alt="time series"' in page
+    assert files_under(tmpfs.path) == before and "trajectory.png" not in " ".join(before)
