@@ -225,14 +225,14 @@ def run_batch(cfg: BatchConfig, progress: bool | None = None, log=print) -> dict
         if todo and not cfg.scheduler and (cfg.start or worker.default_start()) == "fork":
             worker.prestart()  # the fork server imports while the ledger is read and the pool starts
         bar = _Progress(len(todo), progress)
-        for spec in (s for s in todo if s.bad_input is not None):  # --keep-going: failed with their cause
-            ledger_mod.record(con, _row(spec, RunOutcome("failed", error=f"bad input: {spec.bad_input}"), root))
-            counts["failed"] += 1
-            bar.update(False)
-        todo = [s for s in todo if s.bad_input is None]
+        bad, todo = [s for s in todo if s.bad_input is not None], [s for s in todo if s.bad_input is None]
         unrecorded = {s.key for s in todo if s.key not in have}
-        results = (pools.dask_results if cfg.scheduler else pools.local_results)(todo, root, cfg)
+        results = (pools.dask_results if cfg.scheduler else pools.local_results)(todo, root, cfg)  # starts when read
         try:
+            for spec in bad:  # --keep-going: failed with their cause
+                ledger_mod.record(con, _row(spec, RunOutcome("failed", error=f"bad input: {spec.bad_input}"), root))
+                counts["failed"] += 1
+                bar.update(False)
             for spec, res in results:
                 if res.unwritable is not None:  # a full disk, a read-only or vanished folder: the batch stops
                     raise OutputError(*res.unwritable)
