@@ -1,13 +1,15 @@
 """``sumo-avoid``: run scenarios and print their metrics.
 
 Bad input (a malformed scenario, override, flag or file) prints one line to stderr naming the
-file, the key and what was expected, and exits with code 2, before anything is written. Exit
+file, the key and what was expected, and exits with code 2, before anything is written; so does an
+output that cannot be written (a full disk, a read-only or vanished folder: the path and the OS's reason). Exit
 codes (docs/errors.md): 0 ok; 1 runs failed or suite criteria not met; 2 bad input; 3 the run
 crashed (SUMO died or raised mid-run); 130 interrupted.
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
 import datetime
 import json
 import pathlib
@@ -17,6 +19,7 @@ import tempfile
 
 from sumo_avoid.control import CONTROLLERS
 from sumo_avoid.core.config import ScenarioError, ScenarioErrors
+from sumo_avoid.core.output_error import OutputError, reason, writing
 from sumo_avoid.runs import faults, runner, worker
 from sumo_avoid.runs.job import RunJob, RunOutcome
 from sumo_avoid.scenario import spec as scenario
@@ -85,18 +88,24 @@ def cmd_run(args) -> int:
         stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
         out = pathlib.Path("reports") / "runs" / f"{scn.name}-{scn.spec.ego.controller}-s{scn.spec.sim.seed}-{stamp}"
     made = files.make_dirs(out, "--out")  # refused now, not after the run
+    kept: list[pathlib.Path] = []
     try:
         with tempfile.TemporaryDirectory(prefix="sumo-avoid-run-") as tmp:
             res = _run_child(args, scn, pathlib.Path(tmp))
+            if res.unwritable is not None:  # its own folder filled up, turned read-only or vanished
+                raise OutputError(*res.unwritable)
             if res.ok:
-                _keep(pathlib.Path(tmp), out)
+                _keep(pathlib.Path(tmp), out, kept)
             elif res.bad_input is None:  # crashed: the log and a failure record, never metrics
-                _keep(pathlib.Path(tmp), out, only=("sumo.log",))
+                _keep(pathlib.Path(tmp), out, kept, only=("sumo.log",))
                 files.write_atomic(out / "failed.json", json.dumps(
                     {"status": "failed", "error": res.error, "where": res.where, "scenario": str(scn.path),
                      "seed": scn.spec.sim.seed,
                      "controller": scn.spec.ego.controller}, indent=2, sort_keys=True) + "\n")
-    except BaseException:
+    except BaseException:  # nothing half-written: what this run put into --out goes, and the folders it made
+        for f in kept:
+            with contextlib.suppress(OSError):  # e.g. on a file system that turned read-only
+                f.unlink()
         files.remove_dirs(made)
         raise
     if res.bad_input is not None:  # input SUMO refused only once it ran: nothing written
@@ -145,11 +154,14 @@ def _sim_time(path: pathlib.Path) -> float:
 _RUN_FILES = ("result.json", "stdout.txt", "stderr.txt", "progress")
 
 
-def _keep(tmp: pathlib.Path, out: pathlib.Path, only=None) -> None:
-    """Move the run's outputs from its private folder into ``out``."""
+def _keep(tmp: pathlib.Path, out: pathlib.Path, kept: list, only=None) -> None:
+    """Move the run's outputs from its private folder into ``out`` (an existing folder), each path in
+    ``kept`` before it is written; raises OutputError naming the file that cannot be written."""
     for f in sorted(tmp.iterdir()):
         if f.name not in _RUN_FILES and (only is None or f.name in only):
-            shutil.move(str(f), str(out / f.name))
+            kept.append(out / f.name)
+            with writing(out / f.name):  # a vanished ``out`` is not made again
+                shutil.move(str(f), str(out / f.name))
 
 
 def main(argv=None) -> int:
@@ -173,6 +185,12 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("sumo-avoid: interrupted", file=sys.stderr)
         return 130
+    except OutputError as e:  # a full disk, a read-only or vanished folder: the path and the OS's reason
+        print(f"sumo-avoid: error: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except OSError as e:  # any other file the system refused (each write above names its own path)
+        print(f"sumo-avoid: error: {e.filename or '<file>'}: {reason(e)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except ScenarioErrors as e:  # every bad input of a batch, one line each
         for err in e.errors:
             print(f"sumo-avoid: error: {err}", file=sys.stderr)

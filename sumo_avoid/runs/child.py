@@ -24,9 +24,10 @@ import sys  # noqa: E402
 import traceback  # noqa: E402
 
 from sumo_avoid.core.config import ScenarioError  # noqa: E402
+from sumo_avoid.core.output_error import OutputError, writing  # noqa: E402
 from sumo_avoid.runs import outputs, runner  # noqa: E402
 from sumo_avoid.runs.faults import CRASH_AT_S, CrashAt, crash  # noqa: E402
-from sumo_avoid.runs.job import SCENARIO, RunJob, RunOutcome  # noqa: E402
+from sumo_avoid.runs.job import SCENARIO, UNWRITABLE_RC, RunJob, RunOutcome  # noqa: E402
 from sumo_avoid.runs.watch import ProgressFile, cpu_s, die_with_parent, own_stdio  # noqa: E402
 from sumo_avoid.scenario import spec as scenario  # noqa: E402
 
@@ -45,6 +46,12 @@ def exit_now(rc: int) -> None:
     os._exit(rc)
 
 
+def exit_unwritable(e: OSError) -> None:
+    """Exit with :data:`~sumo_avoid.runs.job.UNWRITABLE_RC` + the error's errno: the run's folder cannot
+    be written, so the exit code is the only way left to tell the parent why."""
+    exit_now(UNWRITABLE_RC + e.errno if e.errno and e.errno < 256 - UNWRITABLE_RC else 1)
+
+
 def enter(message: dict, inherited_fds=()) -> None:
     """A freshly forked child: close the parent's ``inherited_fds``, own stdio files in the job's
     folder, the run, exit (never returns)."""
@@ -52,7 +59,10 @@ def enter(message: dict, inherited_fds=()) -> None:
     try:
         for fd in inherited_fds:
             os.close(fd)
-        own_stdio(pathlib.Path(message["job"]["out_dir"]))
+        try:
+            own_stdio(pathlib.Path(message["job"]["out_dir"]))
+        except OSError as e:  # its folder is gone or cannot be written: nothing to say on the parent's stderr
+            exit_unwritable(e)
         rc = run(message)
     except BaseException:  # whatever it was, the parent reads the exit status and stderr.txt (fd 2: sys.stderr
         os.write(2, traceback.format_exc().encode())  # may be a caller's replacement, e.g. a test's capture)
@@ -79,8 +89,11 @@ def run(message: dict) -> int:
 
     def finish(outcome: RunOutcome) -> None:
         part = out / "result.json.part"
-        part.write_text(json.dumps(dataclasses.replace(outcome, clock_s=marks).to_json(), sort_keys=True))
-        os.replace(part, out / "result.json")
+        try:
+            part.write_text(json.dumps(dataclasses.replace(outcome, clock_s=marks).to_json(), sort_keys=True))
+            os.replace(part, out / "result.json")
+        except OSError as e:  # not even the result can be written: the exit code tells why
+            exit_unwritable(e)
 
     try:
         marks["imported_wall"] = _IMPORTED if own_imports else time.time()
@@ -100,10 +113,14 @@ def run(message: dict) -> int:
         if after_run is None:
             m = outputs.write_outputs(res, out, plots=scn.spec.output.plots and job.plots)
         else:
-            m = after_run(res, job, out)
+            with writing(out):
+                m = after_run(res, job, out)
         marks["written_wall"] = time.time()
         finish(RunOutcome("done", metrics=m, timings_s=res.timings, cpu_s=cpu_s()))
         return 0
+    except OutputError as e:  # a file of the run cannot be written: the caller stops, one line
+        finish(RunOutcome("failed", error=str(e)[:500], unwritable=[e.path, e.reason]))
+        return 1
     except ScenarioError as e:  # bad input found only once SUMO ran: the caller reports it as such
         finish(RunOutcome("failed", error=f"ScenarioError: {e}"[:500], bad_input=str(e)))
         return 1

@@ -14,6 +14,9 @@ from typing import Any, Mapping
 
 SCENARIO = "scenario"  # the standard job kind: metrics.json, trajectories.csv, the plug-ins' tables and plots
 STATUSES = ("done", "failed", "crashed", "timeout")
+# a child that cannot write even its result exits with UNWRITABLE_RC + errno (errno < 156), the parent
+# reads the reason from that code: its folder is on a full disk, read-only or gone
+UNWRITABLE_RC = 100
 
 
 @dataclass(frozen=True)
@@ -57,7 +60,7 @@ class RunOutcome:
     """What came of one :class:`RunJob`; the child writes its part, the parent adds its own.
 
     ``status``: ``done``; ``failed`` (the run raised: its one-line ``error``, and ``bad_input`` when the
-    input was found bad only once SUMO ran); ``crashed`` (the process ended without a result: died by a
+    input was found bad only once SUMO ran, ``unwritable`` when a file could not be written); ``crashed`` (the process ended without a result: died by a
     signal, ``where`` = the Python frame it died in, or exited without one); ``timeout`` (killed at
     its timeout). ``clock_s``: event -> wall-clock time (s since the epoch), every event named ``*_wall``.
     """
@@ -66,6 +69,7 @@ class RunOutcome:
     error: str | None = None  # one line
     where: str | None = None  # crashed: the innermost Python frame faulthandler wrote, e.g. libsumo/libsumo.py:3545 (start)
     bad_input: str | None = None
+    unwritable: list | None = None  # [path, reason]: an output that could not be written (the run's files are void)
     metrics: dict | None = None  # the kind's result: metrics.json's content for SCENARIO
     timings_s: dict = field(default_factory=dict)  # the rollout's wall-clock phases (setup_s, loop_s, total_s)
     cpu_s: float | None = None  # the child's CPU time

@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import pathlib
 
+from sumo_avoid.core.output_error import writing
 from sumo_avoid.metrics import clean, compute
 from sumo_avoid.plots import PLOTS
 from sumo_avoid.rollout.result import RunResult
@@ -29,18 +30,25 @@ def timings(res: RunResult) -> dict:
 
 
 def write_outputs(res: RunResult, out_dir: pathlib.Path, plots: bool = True) -> dict:
-    out_dir.mkdir(parents=True, exist_ok=True)
+    """Write the run's files into ``out_dir`` (made if its parent exists: a vanished folder is not made
+    again); raises OutputError naming the file that cannot be written (core/output_error.py)."""
     m = run_metrics(res)
-    (out_dir / "metrics.json").write_text(json.dumps(m, indent=2, sort_keys=True) + "\n")
-    (out_dir / "timings.json").write_text(json.dumps(clean(timings(res)), indent=2, sort_keys=True) + "\n")
-    res.traj.to_csv(out_dir / "trajectories.csv", index=False)
+    with writing(out_dir):
+        out_dir.mkdir(exist_ok=True)
+    with writing(out_dir / "metrics.json"):
+        (out_dir / "metrics.json").write_text(json.dumps(m, indent=2, sort_keys=True) + "\n")
+    with writing(out_dir / "timings.json"):
+        (out_dir / "timings.json").write_text(json.dumps(clean(timings(res)), indent=2, sort_keys=True) + "\n")
+    tables = {"trajectories": res.traj}
     if res.persons is not None and len(res.persons):  # pedestrians (and riders while they walk)
-        res.persons.to_csv(out_dir / "persons.csv", index=False)
-    for name, table in res.tables.items():
-        table.to_csv(out_dir / f"{name}.csv", index=False)
+        tables["persons"] = res.persons
+    for name, table in {**tables, **res.tables}.items():
+        with writing(out_dir / f"{name}.csv"):
+            table.to_csv(out_dir / f"{name}.csv", index=False)
     if plots:
         title = (f"{m['scenario']} · {m['controller']} · seed {m['seed']} · collisions {m['collisions']}"
                  f" · goal {'reached' if m['goal_reached'] else 'NOT reached'}")
         for name in plot_names(res.scenario):
-            PLOTS[name].factory(res, m, out_dir, title)
+            with writing(out_dir):
+                PLOTS[name].factory(res, m, out_dir, title)
     return m

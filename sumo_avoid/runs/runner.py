@@ -80,7 +80,7 @@ def run(scn, *, log_file=None, progress: bool = False, callbacks=()) -> RunResul
         try:
             sim = SumoSim(args)
         except SumoStartError as e:
-            raise sumo_load_error(scn, str(e)) from None
+            raise sumo_load_error(scn, str(e), at_start=True) from None
         with sim:
             stack = assemble(scn, context(scn, sim.step_s, road, walls, obstacles), controller)
             for hook in hooks:

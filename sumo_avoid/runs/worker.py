@@ -42,9 +42,10 @@ import threading
 import time
 import uuid
 
+from sumo_avoid.core.output_error import OutputError, from_errno, writing
 from sumo_avoid.runs import faults
 from sumo_avoid.runs.child import enter
-from sumo_avoid.runs.job import RunJob, RunOutcome
+from sumo_avoid.runs.job import UNWRITABLE_RC, RunJob, RunOutcome
 from sumo_avoid.runs.watch import crash_site
 
 STARTS = ("fork", "spawn")  # what a batch may choose (``"here"`` is for a single-threaded caller: run_in)
@@ -105,21 +106,33 @@ def _child_env() -> dict:
 
 # --- parent side ------------------------------------------------------------------------------
 def run_one(job: RunJob, root: str, timeout_s: float, start: str | None = None) -> RunOutcome:
-    """Run ``job`` in its own process with its artifacts in ``<root>/<key[:16]>``; never raises.
+    """Run ``job`` in its own process with its artifacts in ``<root>/<key[:16]>``; never raises. A run whose
+    files cannot be written (a full disk, a read-only or vanished folder) has ``unwritable`` set and
+    leaves no folder.
 
     ``start``: ``"fork"`` (from the warm fork server) or ``"spawn"`` (fresh interpreter);
     default :func:`default_start`.
     """
     root_p = pathlib.Path(root).absolute()  # the fork server's working directory may not be ours
     tmp = root_p / ".tmp" / f"{job.key[:16]}-{uuid.uuid4().hex[:8]}"
-    tmp.mkdir(parents=True, exist_ok=True)
-    res = run_in(tmp, job, timeout_s, start)
-    (tmp / "result.json").write_text(json.dumps(res.to_json(), sort_keys=True))  # now with the parent's side
     final = root_p / job.key[:16]
-    if final.exists():  # left over from an unfinished earlier attempt (done runs are never re-run)
-        shutil.rmtree(final)
-    os.replace(tmp, final)
-    return dataclasses.replace(res, artifacts=str(final))
+    try:
+        with writing(tmp):
+            for d in (root_p, tmp.parent, tmp):  # no parents: a folder above ``root`` that vanished is not made again
+                d.mkdir(exist_ok=True)
+        res = run_in(tmp, job, timeout_s, start)
+        if res.unwritable is None:
+            with writing(tmp / "result.json"):
+                (tmp / "result.json").write_text(json.dumps(res.to_json(), sort_keys=True))  # with the parent's side
+            with writing(final):
+                if final.exists():  # left over from an unfinished earlier attempt (done runs are never re-run)
+                    shutil.rmtree(final)
+                os.replace(tmp, final)
+            return dataclasses.replace(res, artifacts=str(final))
+    except OutputError as e:
+        res = RunOutcome("failed", error=str(e), unwritable=[e.path, e.reason])
+    shutil.rmtree(tmp, ignore_errors=True)  # nothing half-written: the run's partial folder goes
+    return res
 
 
 def run_in(tmp: pathlib.Path, job: RunJob, timeout_s: float = math.inf, start: str | None = None,
@@ -156,6 +169,9 @@ def outcome_of(tmp: pathlib.Path, status: dict, timeout_s: float) -> RunOutcome:
         res = RunOutcome("timeout", error=f"timeout: run exceeded {timeout_s:g} s and was killed")
     elif status.get("error"):
         res = RunOutcome("crashed", error=status["error"])
+    elif UNWRITABLE_RC < rc < 256:  # the child could not write its folder at all (runs.child.exit_unwritable)
+        gone = from_errno(rc - UNWRITABLE_RC, tmp)
+        res = RunOutcome("failed", error=str(gone), unwritable=[gone.path, gone.reason])
     elif rc < 0:
         res = RunOutcome("crashed", error=f"worker died: {_signal_name(-rc)}", where=crash_site(tmp / "stderr.txt") or None)
     else:

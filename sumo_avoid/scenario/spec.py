@@ -30,10 +30,15 @@ from sumo_avoid.scenario.checks import (
 )
 from sumo_avoid.scenario.obstacles import RandomObstaclesConfig, draw
 from sumo_avoid.scenario.plugins import build_tables, check_choices, check_renamed
+from sumo_avoid.sumo.inputs import FLOCK_MAX_SPEED_MPS, refused_file
 
 MIN_STEP_S, MAX_STEP_S = 0.001, 10.0  # SUMO counts time in ms
 MAX_DURATION_S = 86_400.0  # one simulated day: a longer run is a typo, not a study
 MAX_SEED = 2**31 - 1
+# absurd magnitudes are typos (1e300 overflowed the arena's geometry mid-run): the bounds of an arena
+MAX_ARENA_M = 1e6  # an arena's side, m
+MAX_COORD_M = 1e7  # a coordinate of an arena's corner or start, m
+MAX_VEHICLE_M = 100.0  # a flock vehicle's length or width, m
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -127,8 +132,17 @@ class ArenaConfig:
     def __post_init__(self):
         if len(self.origin) != 2:
             raise ValueError("arena.origin = [x, y]")
-        if self.size_m <= 0:
-            raise ValueError("arena.size_m > 0")
+        if not 0 < self.size_m <= MAX_ARENA_M:  # 1e300 overflowed numpy mid-run
+            raise FieldError("size_m", f"a side in (0, {MAX_ARENA_M:g}] m", self.size_m)
+        for key, v in (("origin", max(map(abs, self.origin))), *(("starts", abs(c)) for p in self.starts for c in p)):
+            if v > MAX_COORD_M:
+                raise FieldError(key, f"coordinates within ±{MAX_COORD_M:g} m", v)
+        for key, v in (("length_m", self.length_m), ("width_m", self.width_m)):
+            if v > MAX_VEHICLE_M:
+                raise FieldError(key, f"a vehicle size of at most {MAX_VEHICLE_M:g} m", v)
+        if not 0 <= self.initial_speed_mps <= FLOCK_MAX_SPEED_MPS:
+            raise FieldError("initial_speed_mps", f"a speed in [0, {FLOCK_MAX_SPEED_MPS:g}] m/s (the flock's "
+                                                  "vehicle type's top speed)", self.initial_speed_mps)
         if self.starts and (len(self.starts) != self.n_agents or any(len(p) != 2 for p in self.starts)):
             raise FieldError("starts", f"{self.n_agents} points [x, y] (one per agent)", [list(p) for p in self.starts])
 
@@ -329,10 +343,12 @@ def _with_random_obstacles(spec: ScenarioSpec, file: str) -> ScenarioSpec:
     return replace(spec, obstacles=spec.obstacles + drawn)
 
 
-def sumo_load_error(scn: Scenario, message: str) -> ScenarioError:
+def sumo_load_error(scn: Scenario, message: str, at_start: bool = False) -> ScenarioError:
     """SUMO's refusal to load the scenario's files as one line naming the file: when SUMO's message
     names a trip, vehicle, flow or route (e.g. "The edge 'x' within the route for trip 't' is not
-    known"), the route or additional file that defines it (key ``sim.routes[i]``), else key ``sim``."""
+    known"), the route or additional file that defines it (key ``sim.routes[i]``); ``at_start`` (SUMO
+    would not start), else the file SUMO's program refuses (:func:`~sumo_avoid.sumo.inputs.refused_file`);
+    else key ``sim``."""
     sumo = " ".join(message.split())
     keyed = [(f"sim.routes[{i}]", f) for i, f in enumerate(scn.route_files)]
     keyed += [(f"sim.additional[{i}]", f) for i, f in enumerate(scn.additional_files)]
@@ -342,6 +358,10 @@ def sumo_load_error(scn: Scenario, message: str) -> ScenarioError:
             if any((k, eid) in elements(f) for k in kinds):
                 return ScenarioError(str(scn.path), key, f"a file SUMO can load: {f}, {tag} '{eid}' (SUMO: {sumo})",
                                      show_got=False)
+    refused = refused_file(scn.net_file, scn.additional_files, scn.route_files) if at_start else None
+    for key, f in keyed:
+        if f == refused:
+            return ScenarioError(str(scn.path), key, f"a file SUMO can load: {f} (SUMO: {sumo})", show_got=False)
     return ScenarioError(str(scn.path), "sim", f"files SUMO can load (SUMO: {sumo})", show_got=False)
 
 

@@ -10,7 +10,6 @@ threads each waiting on one run's process, or on a Dask cluster (``scheduler``).
 """
 from __future__ import annotations
 
-import concurrent.futures as cf
 import hashlib
 import itertools
 import json
@@ -25,12 +24,13 @@ from dataclasses import dataclass, field
 from tqdm import tqdm
 
 from sumo_avoid.core.config import ScenarioError, ScenarioErrors, build
+from sumo_avoid.core.output_error import OutputError
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.spec import MAX_SEED, read_toml
 from sumo_avoid.runs import faults, worker
 from sumo_avoid.runs.job import RunJob, RunOutcome
-from sumo_avoid.runs.worker import kill_all, run_one
 from sumo_avoid.studies import ledger as ledger_mod
+from sumo_avoid.studies import pools
 from sumo_avoid.studies.files import BatchFile
 
 KEY_VERSION = b"sumo_avoid-run-key-v1"
@@ -205,33 +205,6 @@ class _Progress:
             self.bar.close()
 
 
-def _local_results(specs, root, cfg: BatchConfig):
-    with cf.ThreadPoolExecutor(max_workers=cfg.workers, thread_name_prefix="sumo-avoid-run") as ex:
-        futs = {ex.submit(run_one, s.job(), str(root), cfg.timeout_s, cfg.start): s for s in specs}
-        try:
-            for fut in cf.as_completed(futs):
-                yield futs[fut], fut.result()
-        except BaseException:  # Ctrl-C etc.: no new runs, and the running ones are killed
-            for f in futs:
-                f.cancel()
-            kill_all()
-            raise
-
-
-def _dask_results(specs, root, cfg: BatchConfig):
-    from dask.distributed import Client, as_completed
-
-    with Client(cfg.scheduler, set_as_default=False) as client:
-        futs = {client.submit(run_one, s.job(), str(root), cfg.timeout_s, cfg.start, key=f"sumo-avoid-{s.key}",
-                              pure=False): s for s in specs}
-        for fut in as_completed(list(futs), loop=client.loop):
-            try:
-                res = fut.result()
-            except Exception as e:  # the Dask worker itself died, etc.
-                res = RunOutcome("failed", error=f"dask: {type(e).__name__}: {e}".splitlines()[0])
-            yield futs[fut], res
-
-
 def run_batch(cfg: BatchConfig, progress: bool | None = None, log=print) -> dict:
     """Run every run of ``cfg`` not yet in the ledger. Returns counts."""
     root = artifacts_root(cfg.ledger)
@@ -252,18 +225,27 @@ def run_batch(cfg: BatchConfig, progress: bool | None = None, log=print) -> dict
         if todo and not cfg.scheduler and (cfg.start or worker.default_start()) == "fork":
             worker.prestart()  # the fork server imports while the ledger is read and the pool starts
         bar = _Progress(len(todo), progress)
-        results = _dask_results if cfg.scheduler else _local_results
+        bad, todo = [s for s in todo if s.bad_input is not None], [s for s in todo if s.bad_input is None]
+        unrecorded = {s.key for s in todo if s.key not in have}
+        results = (pools.dask_results if cfg.scheduler else pools.local_results)(todo, root, cfg)  # starts when read
         try:
-            for spec in (s for s in todo if s.bad_input is not None):  # --keep-going: failed with their cause
+            for spec in bad:  # --keep-going: failed with their cause
                 ledger_mod.record(con, _row(spec, RunOutcome("failed", error=f"bad input: {spec.bad_input}"), root))
                 counts["failed"] += 1
                 bar.update(False)
-            todo = [s for s in todo if s.bad_input is None]
-            for spec, res in results(todo, root, cfg):
+            for spec, res in results:
+                if res.unwritable is not None:  # a full disk, a read-only or vanished folder: the batch stops
+                    raise OutputError(*res.unwritable)
                 ledger_mod.record(con, _row(spec, res, root), res.metrics)
+                unrecorded.discard(spec.key)
                 counts[res.ledger_status] += 1
                 bar.update(res.ok)
+        except OutputError:
+            results.close()  # the running runs are killed; the ledger keeps every row recorded so far
+            pools.discard_unrecorded(root, unrecorded)
+            raise
         finally:
+            results.close()
             bar.close()
     finally:
         con.close()

@@ -8,11 +8,13 @@ after them) and atomic writes. Seeds are kept as written (``"1-20"``, ``7`` or `
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import pathlib
 from dataclasses import dataclass
 
 from sumo_avoid.core.config import FieldError, ScenarioError, field_doc
+from sumo_avoid.core.output_error import OutputError, reason
 
 Seeds = str | int | tuple[int, ...]
 
@@ -105,7 +107,7 @@ def make_dirs(path, flag: str) -> list[pathlib.Path]:
         raise ScenarioError(CL, flag, f"a folder that can be created ({e.strerror})", str(path)) from None
     if not os.access(path, os.W_OK | os.X_OK):
         remove_dirs(made)
-        raise ScenarioError(CL, flag, "a folder this user can write", str(path))
+        raise ScenarioError(CL, flag, f"a folder this user can write ({_not_writable(path)})", str(path))
     return made
 
 
@@ -128,13 +130,24 @@ def check_out_file(path, flag: str) -> None:
     if not p.is_dir():
         raise ScenarioError(CL, flag, f"a path under a folder ({p} is a file)", str(path))
     if not os.access(p, os.W_OK | os.X_OK):
-        raise ScenarioError(CL, flag, f"a path this user can write ({p} is not writable)", str(path))
+        raise ScenarioError(CL, flag, f"a path this user can write ({p}: {_not_writable(p)})", str(path))
+
+
+def _not_writable(folder) -> str:
+    """The operating system's reason a folder ``os.access`` finds not writable."""
+    try:
+        read_only = bool(os.statvfs(folder).f_flag & os.ST_RDONLY)
+    except OSError:
+        read_only = False
+    return os.strerror(errno.EROFS if read_only else errno.EACCES)
 
 
 def write_atomic(path, data: str | bytes) -> None:
-    """Write a file whole or not at all: a temporary file beside it, then renamed over it."""
+    """Write a file whole or not at all: a temporary file beside it, then renamed over it. Its folder
+    must exist (:func:`make_dirs` makes a command's folders when it starts; a folder that vanished since
+    is not made again). Raises OutputError naming ``path`` if it cannot be written (a full disk, a
+    read-only or vanished folder)."""
     path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     part = path.with_name(f".{path.name}.{os.getpid()}.part")
     try:
         if isinstance(data, bytes):
@@ -142,6 +155,8 @@ def write_atomic(path, data: str | bytes) -> None:
         else:
             part.write_text(data)
         os.replace(part, path)
+    except OSError as e:
+        raise OutputError(path, reason(e)) from None
     finally:
         with contextlib.suppress(OSError):
             part.unlink()

@@ -11,6 +11,7 @@ shares; the paired Wilcoxon signed-rank test of fixed against tuned on the same 
 """
 from __future__ import annotations
 
+import io
 import json
 import pathlib
 import sys
@@ -26,6 +27,7 @@ from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.spec import read_toml
 from sumo_avoid.studies import batch
 from sumo_avoid.studies import ledger as ledger_mod
+from sumo_avoid.studies.files import write_atomic
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 DEFAULT = tuple(ROOT / "scenarios" / "formation" / f"arena_g{k}.toml" for k in (1, 2, 3))
@@ -115,7 +117,9 @@ def figure(df: pd.DataFrame, root: pathlib.Path, scn: str, out_png: pathlib.Path
         ax.set_title(f"{scn} · {var} · seed {seed} · T {_fmt(res.get('formation_time_s'))} s · "
                      f"S_ef {_fmt(res.get('s_ef'))}", fontsize=8)
         ax.legend(fontsize=6, loc="lower right")
-    fig.savefig(out_png, dpi=120, bbox_inches="tight")
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=120, bbox_inches="tight")
+    write_atomic(out_png, buf.getvalue())
 
 
 def run(args) -> int:
@@ -143,8 +147,8 @@ def run(args) -> int:
         if col not in table:
             table[col] = np.nan
     command = "sumo-avoid " + " ".join(sys.argv[1:])
-    (args.out / "summary.md").write_text(summary(table, command, tuned))
-    table[["scenario", "variant", "seed", "status", *COLS]].to_csv(args.out / "runs.csv", index=False)
+    write_atomic(args.out / "summary.md", summary(table, command, tuned))
+    write_atomic(args.out / "runs.csv", table[["scenario", "variant", "seed", "status", *COLS]].to_csv(index=False))
     for scn in sorted(table["scenario"].unique()):
         figure(table, led.parent, scn, args.out / f"fig_{scn}.png")
     print((args.out / "summary.md").read_text())

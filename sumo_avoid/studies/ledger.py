@@ -15,6 +15,7 @@ import functools
 import hashlib
 import io
 import json
+import os
 import pathlib
 import re
 import sqlite3
@@ -23,6 +24,7 @@ from importlib import metadata
 import pandas as pd
 
 from sumo_avoid.core.config import ScenarioError
+from sumo_avoid.core.output_error import vanished, writing
 from sumo_avoid.studies.files import CL, check_out_file, write_atomic
 
 FIXED = {  # column -> SQL type; metric columns are added after these
@@ -47,12 +49,14 @@ _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 EXPORT_SUFFIXES = (".csv", ".parquet")
 
 
-def check(path, flag: str = "--ledger", new_ok: bool = True) -> None:
+def check(path, flag: str = "--ledger", new_ok: bool = True, needs=()) -> None:
     """``path`` is a ledger, or (``new_ok``: one to write) a file that can be created, not named like its
     exports (.csv, .parquet): not a folder, not a file of another kind, not a SQLite database of
-    something else. Raises ScenarioError naming ``flag``."""
+    something else; an existing one has the columns ``needs``. Raises ScenarioError naming ``flag``
+    (the ledger and its missing columns)."""
     path = pathlib.Path(path)
-    check_out_file(path, flag)
+    if new_ok:  # one to write; one only read may lie in a read-only folder
+        check_out_file(path, flag)
     if new_ok and path.suffix.lower() in EXPORT_SUFFIXES:  # a ledger to write: export() would overwrite it
         raise ScenarioError(CL, flag, "a ledger name not ending in .csv or .parquet (the ledger's CSV and Parquet "
                             "exports are written beside it with those suffixes), e.g. runs.sqlite", str(path))
@@ -69,17 +73,23 @@ def check(path, flag: str = "--ledger", new_ok: bool = True) -> None:
     if (tables or not new_ok) and not {"key", "status"} <= cols:
         raise ScenarioError(CL, flag, "a ledger (a SQLite file with a table 'runs' of sumo-avoid runs), not another "
                             f"database (tables: {sorted(tables)})", str(path))
+    missing = [c for c in needs if c not in cols]
+    if cols and missing:
+        raise ScenarioError(str(path), "runs", f"a ledger table with the columns {', '.join(needs)} (missing: "
+                            f"{', '.join(missing)})", show_got=False)
 
 
 def connect(path) -> sqlite3.Connection:
-    """Open (creating if needed) a ledger; WAL mode, table ``runs``."""
+    """Open (creating if needed) a ledger; WAL mode, table ``runs``. Raises OutputError if it cannot be
+    written (as :func:`record` does)."""
     path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    con = sqlite3.connect(path, timeout=30.0, isolation_level=None)  # explicit transactions below
-    con.execute("PRAGMA journal_mode=WAL")
-    con.execute("PRAGMA synchronous=FULL")
-    cols = ", ".join(f'"{c}" {t}' for c, t in FIXED.items())
-    con.execute(f"CREATE TABLE IF NOT EXISTS runs ({cols})")
+    with writing(path):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        con = sqlite3.connect(path, timeout=30.0, isolation_level=None)  # explicit transactions below
+        con.execute("PRAGMA journal_mode=WAL")
+        con.execute("PRAGMA synchronous=FULL")
+        cols = ", ".join(f'"{c}" {t}' for c, t in FIXED.items())
+        con.execute(f"CREATE TABLE IF NOT EXISTS runs ({cols})")
     return con
 
 
@@ -140,7 +150,18 @@ def status_of(con: sqlite3.Connection) -> dict[str, str]:
 
 
 def record(con: sqlite3.Connection, row: dict, metrics: dict | None = None) -> bool:
-    """Write one finished run in one transaction. Returns False if a ``done`` row was kept as is."""
+    """Write one finished run in one transaction. Returns False if a ``done`` row was kept as is. Raises
+    OutputError naming the ledger if it cannot be written (a full disk, a read-only folder) or is gone
+    from its folder (SQLite would go on writing into the deleted file: the rows would be lost)."""
+    path = con.execute("PRAGMA database_list").fetchone()[2]
+    with writing(path):
+        done = _record(con, row, metrics)
+    if not os.path.exists(path):
+        raise vanished(path)
+    return done
+
+
+def _record(con: sqlite3.Connection, row: dict, metrics: dict | None) -> bool:
     values = {c: row.get(c) for c in FIXED}
     values.update(scalar_metrics(metrics or {}))
     with _transaction(con):

@@ -13,11 +13,13 @@ folders written by ``sumo-avoid run`` (each with ``metrics.json``), or one such 
 from __future__ import annotations
 
 import base64
+import contextlib
 import datetime
 import html
 import io
 import json
 import pathlib
+import tempfile
 import types
 
 import pandas as pd
@@ -30,12 +32,14 @@ from sumo_avoid.plots.trajectories import (
     plot_trajectories,
 )
 from sumo_avoid.studies import ledger
-from sumo_avoid.studies.files import CL, check_out_file, write_atomic
+from sumo_avoid.studies.files import CL, check_out_file, make_dirs, remove_dirs, write_atomic
 from sumo_avoid.road.network import Road
 
 METRICS = ("collisions", "min_gap_m", "phi_coll", "phi_wall", "mean_speed_mps", "time_to_goal_s",
            "path_length_m", "sumo_collisions", "min_ttc_s", "min_ttc2d_s", "max_drac_mps2", "min_pet_s",
            "wrong_way_m", "off_road_m", "max_abs_jerk_mps3", "max_lat_accel_mps2")
+
+NEEDS = ("key", "scenario", "controller", "seed", "status", "error")  # the ledger columns a report reads
 
 
 def load_runs(src) -> tuple:
@@ -45,7 +49,7 @@ def load_runs(src) -> tuple:
     if src.is_dir() and (src / "ledger.sqlite").is_file():
         src = src / "ledger.sqlite"
     if src.is_file():
-        ledger.check(src, "LEDGER_OR_RUN_DIR", new_ok=False)
+        ledger.check(src, "LEDGER_OR_RUN_DIR", new_ok=False, needs=NEEDS)
         return ledger.read(src), src.resolve().parent
     if not src.is_dir():
         raise ScenarioError(str(src), "<file>", "a ledger file or a folder of runs (no such file)", show_got=False)
@@ -190,10 +194,9 @@ def trajectory_png(row, base: pathlib.Path) -> str | None:
     net = row.get("net_file")
     if not (d / "trajectories.csv").is_file() or not isinstance(net, str) or not pathlib.Path(net).is_file():
         return None
-    out = d / "trajectory.png"
-    plot_trajectories(Road.from_net_file(net), pd.read_csv(d / "trajectories.csv"), out,
-                      title=f"{row['scenario']} · {row['controller']} · seed {row['seed']}")
-    return _png_file(out)
+    return _drawn(d / "trajectory.png", lambda out: plot_trajectories(
+        Road.from_net_file(net), pd.read_csv(d / "trajectories.csv"), out,
+        title=f"{row['scenario']} · {row['controller']} · seed {row['seed']}"))
 
 
 def timeseries_png(row, base: pathlib.Path) -> str | None:
@@ -205,10 +208,23 @@ def timeseries_png(row, base: pathlib.Path) -> str | None:
         return _png_file(d / "timeseries.png")
     if not (d / "trajectories.csv").is_file():
         return None
-    out = d / "timeseries.png"
-    plot_timeseries(series(types.SimpleNamespace(traj=pd.read_csv(d / "trajectories.csv"))), out,
-                    title=f"{row['scenario']} · {row['controller']} · seed {row['seed']}")
-    return _png_file(out)
+    return _drawn(d / "timeseries.png", lambda out: plot_timeseries(
+        series(types.SimpleNamespace(traj=pd.read_csv(d / "trajectories.csv"))), out,
+        title=f"{row['scenario']} · {row['controller']} · seed {row['seed']}"))
+
+
+def _drawn(cache: pathlib.Path, draw) -> str:
+    """A plot drawn into the run's folder (kept for the next report), or, where that folder cannot be
+    written (read-only, full), into a temporary folder: the report needs no write beside the ledger."""
+    try:
+        draw(cache)
+        return _png_file(cache)
+    except OSError:  # a half-drawn file would be taken for the plot next time
+        with contextlib.suppress(OSError):
+            cache.unlink(missing_ok=True)
+    with tempfile.TemporaryDirectory(prefix="sumo-avoid-report-") as tmp:
+        draw(pathlib.Path(tmp) / cache.name)
+        return _png_file(pathlib.Path(tmp) / cache.name)
 
 
 def _fmt(v) -> str:
@@ -291,6 +307,17 @@ def cmd_report(args) -> int:
         if path is not None:
             check_out_file(path, flag)  # before the (slow) report is built
     df, base = load_runs(args.source)
+    made = [d for flag, path in (("--out", args.out), ("--md", args.md), ("--csv", args.csv)) if path is not None
+            for d in make_dirs(path.parent, flag)]  # now: a folder that vanishes later is not made again
+    try:
+        _write(args, df, base)
+    except BaseException:
+        remove_dirs(made)
+        raise
+    return 0
+
+
+def _write(args, df, base: pathlib.Path) -> None:
     try:
         page = build_html(df, base, args.title or f"sumo-avoid study: {args.source}", args.run)
     except ValueError as e:
@@ -306,4 +333,3 @@ def cmd_report(args) -> int:
         write_atomic(args.md, text)
     if args.csv:
         write_atomic(args.csv, df.to_csv(index=False))
-    return 0

@@ -24,12 +24,13 @@ import numpy as np
 import pandas as pd
 
 from sumo_avoid.core.config import ScenarioError
+from sumo_avoid.core.output_error import OutputError, writing
 from sumo_avoid.runs import worker
 from sumo_avoid.runs.job import RunJob
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.studies import formation_study
 from sumo_avoid.studies.batch import MAX_SEEDS
-from sumo_avoid.studies.files import make_dirs, remove_dirs
+from sumo_avoid.studies.files import make_dirs, remove_dirs, write_atomic
 from sumo_avoid.studies.table4 import EXTRA, PAPER, ROOT, SPEEDS, table4_job
 
 class RunFailed(RuntimeError):
@@ -80,8 +81,8 @@ def _fmt(x, metric):
 
 
 def write_table(rows: list[dict], runs: list[dict], out: pathlib.Path, command: str, settings: str) -> None:
-    pd.DataFrame(rows, columns=["v_flock", "metric", "ours_mean", "ours_sd", "paper_mean", "paper_sd"]).to_csv(
-        out / "table4.csv", index=False)
+    write_atomic(out / "table4.csv", pd.DataFrame(
+        rows, columns=["v_flock", "metric", "ours_mean", "ours_sd", "paper_mean", "paper_sd"]).to_csv(index=False))
     lines = ["# Table 4 (seed 000) reproduced in SUMO", "", f"Command: `{command}`", "", settings, "",
              "| v_flock | metric | ours mean ± sd | paper mean ± sd | within paper ±1 sd |", "|---|---|---|---|---|"]
     for r in rows:
@@ -99,7 +100,7 @@ def write_table(rows: list[dict], runs: list[dict], out: pathlib.Path, command: 
             vals = [np.mean([r[k] for r in mine if r.get(k) is not None] or [np.nan]) for k in EXTRA]
             lines.append(f"| {v} | " + " | ".join(f"{x:.4g}" for x in vals)
                          + f" | {np.mean([r['wall_s'] for r in mine]):.1f} |")
-    (out / "table4.md").write_text("\n".join(lines) + "\n")
+    write_atomic(out / "table4.md", "\n".join(lines) + "\n")
 
 
 def _outcomes(job_list: list[RunJob], jobs: int):
@@ -125,17 +126,20 @@ def _outcomes(job_list: list[RunJob], jobs: int):
 def reproduce_table4(seeds: int = 20, agents: int = 100, duration: float = 600.0, out=None, jobs: int | None = None,
                      sets=(), first_seed: int = 1) -> list[dict]:
     out = pathlib.Path(out) if out else ROOT / "reports" / "table4"
-    (out / "runs").mkdir(parents=True, exist_ok=True)
+    with writing(out / "runs"):
+        (out / "runs").mkdir(exist_ok=True)  # in the existing ``out``: a vanished one is not made again
     job_list = [table4_job(v, s, agents, duration, sets, str(out / f"fig7_v{v}.png") if s == first_seed else None)
                 for v in SPEEDS for s in range(first_seed, first_seed + seeds)]
     jobs = jobs or min(len(job_list), os.cpu_count() or 1)
     runs = []
     for job, res in _outcomes(job_list, jobs):
+        if res.unwritable is not None:  # a full disk, a read-only or vanished folder
+            raise OutputError(*res.unwritable)
         if not res.ok:
             raise RunFailed(f"reproduce table4: the run v_flock {job.params['v']} seed {job.seed} failed: {res.error}")
         r = res.metrics
         runs.append(r)
-        (out / "runs" / f"v{r['v']}_s{r['seed']}.json").write_text(json.dumps(r, indent=1, sort_keys=True))
+        write_atomic(out / "runs" / f"v{r['v']}_s{r['seed']}.json", json.dumps(r, indent=1, sort_keys=True))
         print(f"  v_flock {r['v']} seed {r['seed']}: mu {r['mu']:.3f} v_vel {r['v_vel']:.2f} "
               f"({len(runs)}/{len(job_list)}, {r['wall_s']:.0f} s)", flush=True)
     runs.sort(key=lambda r: (r["v"], r["seed"]))
@@ -188,6 +192,9 @@ def _cmd(args) -> int:
         remove_dirs(made)
         print(f"sumo-avoid: error: {e}", file=sys.stderr)
         return 1
+    except BaseException:
+        remove_dirs([*made, (args.out or ROOT / "reports" / "table4") / "runs"])  # those still empty
+        raise
     for r in rows:
         if r["metric"] in ("mu", "v_vel"):
             print(f"v_flock {r['v_flock']} {r['metric']}: ours {r['ours_mean']:.3f} paper {r['paper_mean']:.3f}")

@@ -32,7 +32,7 @@ from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.spec import read_toml
 from sumo_avoid.studies import batch, ledger
 from sumo_avoid.studies.batch import parse_seeds
-from sumo_avoid.studies.files import SuiteFile, check_out_file, write_atomic
+from sumo_avoid.studies.files import SuiteFile, check_out_file, make_dirs, remove_dirs, write_atomic
 
 OPS = {"==": operator.eq, "!=": operator.ne, "<=": operator.le, ">=": operator.ge, "<": operator.lt, ">": operator.gt}
 AGGREGATES = ("rate", "mean", "min", "max")
@@ -255,15 +255,25 @@ def cmd_suite(args) -> int:
                 seen.add(s.key)
                 all_runs.append(s)
     check_criteria(entries, str(args.suite))
+    made = make_dirs(args.junit.parent, "--junit") if args.junit else []  # a folder that vanishes later: not made again
+    try:
+        results = _run(args, entries, runs_by_entry, all_runs, workers)
+        print(table(results))
+        if args.junit:
+            write_atomic(args.junit, junit_xml(results, args.suite.stem))
+    except BaseException:
+        remove_dirs(made)
+        raise
+    if args.junit:
+        print(f"JUnit XML -> {args.junit}")
+    return 0 if all(r.passed for r in results) else 1
+
+
+def _run(args, entries, runs_by_entry, all_runs, workers) -> list[EntryResult]:
     with tempfile.TemporaryDirectory(prefix="sumo-avoid-suite-") as tmp:
         led = args.ledger or pathlib.Path(tmp) / "ledger.sqlite"
         cfg = batch.BatchConfig(tuple(all_runs), led, workers=workers,
                                 timeout_s=args.timeout, scheduler=args.scheduler)
         print(f"suite {args.suite}: {len(entries)} entries, {len(all_runs)} runs", flush=True)
         batch.run_batch(cfg, progress=False if args.quiet else None)
-        results = evaluate(entries, runs_by_entry, ledger.read(led))
-    print(table(results))
-    if args.junit:
-        write_atomic(args.junit, junit_xml(results, args.suite.stem))
-        print(f"JUnit XML -> {args.junit}")
-    return 0 if all(r.passed for r in results) else 1
+        return evaluate(entries, runs_by_entry, ledger.read(led))

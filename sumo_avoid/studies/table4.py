@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import pathlib
 
+from sumo_avoid.core.output_error import vanished, writing
 from sumo_avoid.metrics import basic
 from sumo_avoid.metrics.flock_score import FlockingOrder
 from sumo_avoid.plots.arena_plots import plot_arena
@@ -48,8 +49,11 @@ def flocking_record(res: RunResult, job: RunJob, out_dir: pathlib.Path) -> dict:
     m = FlockingOrder().compute(res)
     m["collisions"] = int(len(basic.collision_events(res.traj)))
     if p["figure"]:
-        plot_arena(res, pathlib.Path(p["figure"]), f"v_flock = {p['v']} m/s · seed {job.seed} · "
-                   f"N = {p['agents']} · {p['duration']:.0f} s · μ = {m['mu']:.3f}")
+        with writing(p["figure"], discard=True):  # a full disk, a read-only or vanished folder: one line
+            if not pathlib.Path(p["figure"]).parent.is_dir():  # the study's folder vanished: not made again
+                raise vanished(p["figure"])
+            plot_arena(res, pathlib.Path(p["figure"]), f"v_flock = {p['v']} m/s · seed {job.seed} · "
+                       f"N = {p['agents']} · {p['duration']:.0f} s · μ = {m['mu']:.3f}")
     keep = {k: m.get(k) for k in (*PAPER, *EXTRA) if k in m}
     keep.update(v=p["v"], seed=job.seed, wall_s=res.timings["total_s"])
     return keep

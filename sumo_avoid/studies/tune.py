@@ -14,6 +14,7 @@ the same candidates and the ledger supplies every finished run. Writes to ``--ou
 """
 from __future__ import annotations
 
+import io
 import math
 import pathlib
 import sys
@@ -29,7 +30,7 @@ from sumo_avoid.core.config import ScenarioError
 from sumo_avoid.studies import batch
 from sumo_avoid.studies import ledger as ledger_mod
 from sumo_avoid.studies.cuckoo import CuckooSearch
-from sumo_avoid.studies.files import check_out_file
+from sumo_avoid.studies.files import check_out_file, make_dirs, remove_dirs, write_atomic
 
 FAILED_SCORE = 100.0
 TUNABLE = ("formation",)
@@ -123,7 +124,9 @@ def plot_convergence(hist: pd.DataFrame, out_png: pathlib.Path, title: str) -> N
     ax.set_ylabel("score = mean S_ef + penalty x contacts")
     ax.set_title(title, fontsize=9)
     ax.legend(fontsize=8)
-    fig.savefig(out_png, dpi=120, bbox_inches="tight")
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=120, bbox_inches="tight")
+    write_atomic(out_png, buf.getvalue())
 
 
 def add_parser(sub) -> None:
@@ -185,6 +188,7 @@ def cmd_tune(args) -> int:
     show = not args.quiet and sys.stderr.isatty()
     ev = Evaluator(args.scenario, seeds, sets, cfg, args.penalty, progress=False)
     t0 = time.perf_counter()
+    made = make_dirs(args.out, "--out")  # now: a folder that vanishes during the search is not made again
     try:
         with tqdm(total=args.generations, unit="gen", disable=not show, file=sys.stderr) as bar:
             cs, hist = tune(ev, args.generations, args.nests, args.seed, args.beta, args.pa, args.step,
@@ -192,17 +196,19 @@ def cmd_tune(args) -> int:
     except KeyboardInterrupt:
         print("tune: interrupted; running runs killed; re-run the same command to resume", file=sys.stderr)
         return 130
+    except BaseException:
+        remove_dirs(made)
+        raise
     best_u, best = cs.best
     (g_at, g_re), = gains(best_u[None], tuple(args.eta_at), tuple(args.eta_re))
-    args.out.mkdir(parents=True, exist_ok=True)
     df = pd.DataFrame(hist)
-    df.to_csv(args.out / "history.csv", index=False)
+    write_atomic(args.out / "history.csv", df.to_csv(index=False))
     cmd = (f"sumo-avoid tune formation {args.scenario} --generations {args.generations} --nests {args.nests} "
            f"--seeds {args.seeds} --first-seed {args.first_seed} --seed {args.seed} --beta {args.beta} --pa {args.pa}")
-    (args.out / "tuned.toml").write_text(
-        f"# {cmd}\n# best score {best:.6f} (mean S_ef + {args.penalty} x contacts over seeds "
-        f"{args.first_seed}-{args.first_seed + args.seeds - 1}), {cs.evaluations} candidates\n"
-        f"[controllers.formation]\neta_at = {g_at!r}\neta_re = {g_re!r}\n")
+    write_atomic(args.out / "tuned.toml",
+                 f"# {cmd}\n# best score {best:.6f} (mean S_ef + {args.penalty} x contacts over seeds "
+                 f"{args.first_seed}-{args.first_seed + args.seeds - 1}), {cs.evaluations} candidates\n"
+                 f"[controllers.formation]\neta_at = {g_at!r}\neta_re = {g_re!r}\n")
     plot_convergence(df, args.out / "convergence.png", f"cuckoo search, {args.scenario.name}: N={args.nests}, "
                      f"K={args.seeds}, beta={args.beta}, p_a={args.pa}")
     print(f"tune: best eta_at {g_at} eta_re {g_re} score {best:.4f} after {args.generations} generations, "

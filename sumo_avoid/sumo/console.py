@@ -12,6 +12,7 @@ import contextlib
 import os
 import pathlib
 import sys
+import tempfile
 
 
 @contextlib.contextmanager
@@ -38,6 +39,46 @@ def sumo_console_to(path: pathlib.Path):
             sys.stderr = python_stderr
         os.dup2(saved, 2)
         os.close(saved)
+
+
+@contextlib.contextmanager
+def native_stderr_kept():
+    """Inside the block, what native code writes to descriptor 2 (SUMO's errors while it loads its
+    files: libsumo's exception says only "Process Error") is kept as well: the yielded list holds the
+    text afterwards, and the text is passed on to descriptor 2 as if nothing had come between."""
+    said: list[str] = []
+    try:
+        keep = tempfile.TemporaryFile()
+    except OSError:  # nowhere to keep it (a full disk): SUMO writes to descriptor 2 as ever
+        yield said
+        return
+    with keep:
+        sys.stderr.flush()
+        saved = os.dup(2)
+        os.dup2(keep.fileno(), 2)
+        try:
+            yield said
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            keep.seek(0)
+            text = keep.read()
+            with contextlib.suppress(OSError):
+                _write_all(2, text)
+            said.append(text.decode(errors="replace"))
+
+
+def _write_all(fd: int, data: bytes) -> None:
+    while data:
+        data = data[os.write(fd, data):]
+
+
+def first_error(text: str) -> str:
+    """SUMO's first ``Error: ...`` line in ``text``, without the prefix ("" if none)."""
+    for line in text.splitlines():
+        if line.startswith("Error: "):
+            return line[len("Error: "):].strip()
+    return ""
 
 
 def count(log_file: pathlib.Path, kind: str = "Warning") -> int:

@@ -14,12 +14,17 @@ import dataclasses
 import functools
 import gzip
 import itertools
+import os
 import pathlib
+import subprocess
 import xml.etree.ElementTree as ET
+
+import sumo as sumo_package  # eclipse-sumo: SUMO's programs beside libsumo
 
 # SUMO's built-in vehicle types (usable without a <vType>)
 DEFAULT_TYPES = frozenset({"DEFAULT_VEHTYPE", "DEFAULT_PEDTYPE", "DEFAULT_BIKETYPE", "DEFAULT_CONTAINERTYPE",
                            "DEFAULT_TAXITYPE", "DEFAULT_RAILTYPE"})
+FLOCK_MAX_SPEED_MPS = 50.0  # top speed of the vehicle type SumoSim.add_free_vehicles gives an arena's flock
 VEHICLES = ("vehicle", "trip", "flow")
 # root elements of the route and additional files SUMO loads (<add>: the older name of <additional>)
 ROUTE_ROOTS = ("routes", "additional", "add")
@@ -174,3 +179,25 @@ def depart_times(files) -> dict[str, float]:
             except ValueError:  # "triggered", "now", ...
                 pass
     return out
+
+
+def refused_file(net, additional=(), routes=()) -> pathlib.Path | None:
+    """Which file SUMO refused when it would not start and its message names none: the first of the
+    additional files, then the route files (SUMO's load order) that SUMO's own ``sumo`` program refuses
+    with the net and the files before it; None if none is refused alone or there is no ``sumo`` program.
+    Only after a failed start: each try loads the net again."""
+    binary = pathlib.Path(sumo_package.SUMO_HOME) / "bin" / "sumo"
+    files = [("-a", pathlib.Path(f)) for f in additional] + [("-r", pathlib.Path(f)) for f in routes]
+    for k, (_, f) in enumerate(files):
+        args = [str(binary), "-n", str(net), "--end", "0", "--no-step-log", "true", "--no-warnings", "true"]
+        for flag in ("-a", "-r"):
+            chosen = [str(g) for fl, g in files[:k + 1] if fl == flag]
+            args += [flag, ",".join(chosen)] if chosen else []
+        try:
+            rc = subprocess.run(args, capture_output=True, timeout=300,
+                                env={**os.environ, "SUMO_HOME": sumo_package.SUMO_HOME}).returncode
+        except (OSError, subprocess.SubprocessError):
+            return None
+        if rc != 0:
+            return f
+    return None

@@ -22,6 +22,8 @@ import numpy as np
 
 from sumo_avoid.core.snapshot import Snapshot
 from sumo_avoid.core.types import EgoTask
+from sumo_avoid.sumo.console import first_error, native_stderr_kept
+from sumo_avoid.sumo.inputs import FLOCK_MAX_SPEED_MPS
 from sumo_avoid.sumo.placement import RoutePlacement
 from sumo_avoid.sumo.ssm_device import SsmRequest, equip, ssm_args
 
@@ -83,6 +85,13 @@ def sumo_args(net: pathlib.Path, routes, additional, step_s: float, seed: int, l
     return args
 
 
+def start_error(first: str, libsumo_says: str) -> str:
+    """Why SUMO would not start: its first error line, and libsumo's message where that says more."""
+    if not first or libsumo_says in (first, "", "Process Error"):
+        return first or libsumo_says
+    return f"{first}; {libsumo_says}"
+
+
 class SumoStartError(RuntimeError):
     """SUMO refused to load the network, routes or additional files."""
 
@@ -98,12 +107,16 @@ class SumoSim:
     def __init__(self, args: list[str]):
         if libsumo.isLoaded():
             raise RuntimeError("a libsumo simulation is already running in this process")
-        try:
-            libsumo.start(args)
-        except Exception as e:  # libsumo raises TraCIException / FatalTraCIError on bad input
-            if libsumo.isLoaded():
-                libsumo.close()
-            raise SumoStartError(" ".join(str(e).split())) from None
+        with native_stderr_kept() as said:
+            try:
+                libsumo.start(args)
+                refused = None
+            except Exception as e:  # libsumo raises TraCIException / FatalTraCIError on bad input
+                refused = e
+                if libsumo.isLoaded():
+                    libsumo.close()
+        if refused is not None:  # SUMO's own first error line says why (libsumo's may say only "Process Error")
+            raise SumoStartError(start_error(first_error("".join(said)), " ".join(str(refused).split()))) from None
         self.step_s = libsumo.simulation.getDeltaT()
         libsumo.simulation.subscribe(list(_SIM_VARS))
         self._dims: dict[str, tuple[float, float]] = {}  # id -> (length, width), static
@@ -300,7 +313,7 @@ class SumoSim:
             libsumo.vehicletype.copy("DEFAULT_VEHTYPE", type_id)
             libsumo.vehicletype.setLength(type_id, float(length_m))
             libsumo.vehicletype.setWidth(type_id, float(width_m))
-            libsumo.vehicletype.setMaxSpeed(type_id, 50.0)
+            libsumo.vehicletype.setMaxSpeed(type_id, FLOCK_MAX_SPEED_MPS)
             libsumo.vehicletype.setMinGap(type_id, 0.0)
         edge = next(e for e in libsumo.edge.getIDList() if not e.startswith(":"))
         route_id = f"__{type_id}_route"
