@@ -18,7 +18,7 @@ from conftest import GAP, TINY_TUNE, cli_in_process
 
 from sumo_avoid.cli import main
 from sumo_avoid.studies import ledger
-from sumo_avoid.studies.tune import FAILED_SCORE, gains, score
+from sumo_avoid.studies.tune_formation import FAILED_SCORE, gains, score
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
