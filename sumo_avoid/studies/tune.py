@@ -145,7 +145,7 @@ def cmd_tune(args) -> int:
         print("tune: interrupted; running runs killed; re-run the same command to resume", file=sys.stderr)
         return 130
     gens = res["generations"]
-    gens.to_csv(args.out / "generations.csv", index=False, float_format="%.10g")
+    gens.to_csv(args.out / "generations.csv", index=False)
     plot_convergence(res["history"], gens, res["value"], res["minimise"], args.out / "convergence.png",
                      res["title"], res["ylabel"])
     print(f"tune: {res['summary']} ({time.perf_counter() - t0:.1f} s) -> {args.out}/tuned.toml")

@@ -102,8 +102,8 @@ def run(args, ev, bar) -> dict:
     evals = tune_stats.per_seed(tuned_rows, "tuned").merge(tune_stats.per_seed(base_rows, "baseline"), on="seed")
     stats = tune_stats.statistics(hist, names, {**best, "fitness": float(top["mu"])}, evals)
     args.out.mkdir(parents=True, exist_ok=True)
-    hist.to_csv(args.out / "history.csv", index=False, float_format="%.10g")
-    evals.to_csv(args.out / "evaluations.csv", index=False, float_format="%.10g")
+    hist.to_csv(args.out / "history.csv", index=False)
+    evals.to_csv(args.out / "evaluations.csv", index=False)
     cmd = command(args)
     tune_stats.write(stats, args.out, cmd, "the scenario's parameters")
     p = scenario.load(args.scenario, list(sets), seed=args.first_seed).controller_params["flocking"]
