@@ -3,8 +3,6 @@ on real libsumo a tiny search that resumes after SIGKILL to the same result (the
 Dask cluster: tests/studies/test_dask.py)."""
 from __future__ import annotations
 
-import pathlib
-
 import pandas as pd
 import pytest
 from conftest import GAP, TINY_TUNE, assert_refused, cli_in_process, ledger_rows, sigkill_at
@@ -12,8 +10,6 @@ from conftest import GAP, TINY_TUNE, assert_refused, cli_in_process, ledger_rows
 from sumo_avoid.cli import main
 from sumo_avoid.studies import ledger
 from sumo_avoid.studies.tune_formation import FAILED_SCORE, gains, score
-
-ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
 def test_gains_are_log_uniform_with_six_digits():
