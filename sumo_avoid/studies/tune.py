@@ -124,7 +124,8 @@ def check(args):
     return method
 
 
-def cmd_tune(args) -> int:
+def prepare(args):
+    """Every check before anything runs or is written (bad input: ScenarioError); the method and its evaluator."""
     method = check(args)
     seeds = range(args.first_seed, args.first_seed + args.seeds)
     sets = tuple(args.overrides) + ("output.plots=false",)
@@ -135,18 +136,28 @@ def cmd_tune(args) -> int:
     check_out_file(args.out / "tuned.toml", "--out")  # refused now, not after the search
     ledger_mod.check(led, "--ledger")
     cfg = {"ledger": led, "workers": batch.workers_or_cores(args.workers), "scheduler": args.scheduler}
+    return method, Evaluator(args.scenario, seeds, sets, cfg, args.controller, method.value_of(args), method.COLUMNS)
+
+
+def execute(args, method, ev) -> dict:
+    """The search and the shared outputs; returns the method's result (``generations``, ``history``, ...)."""
     show = not args.quiet and sys.stderr.isatty()
-    ev = Evaluator(args.scenario, seeds, sets, cfg, args.controller, method.value_of(args), method.COLUMNS)
     t0 = time.perf_counter()
-    try:
-        with tqdm(total=args.generations + method.EXTRA_STEPS, unit="gen", disable=not show, file=sys.stderr) as bar:
-            res = method.run(args, ev, bar)
-    except KeyboardInterrupt:
-        print("tune: interrupted; running runs killed; re-run the same command to resume", file=sys.stderr)
-        return 130
+    with tqdm(total=args.generations + method.EXTRA_STEPS, unit="gen", disable=not show, file=sys.stderr) as bar:
+        res = method.run(args, ev, bar)
     gens = res["generations"]
     gens.to_csv(args.out / "generations.csv", index=False)
     plot_convergence(res["history"], gens, res["value"], res["minimise"], args.out / "convergence.png",
                      res["title"], res["ylabel"])
     print(f"tune: {res['summary']} ({time.perf_counter() - t0:.1f} s) -> {args.out}/tuned.toml")
+    return res
+
+
+def cmd_tune(args) -> int:
+    method, ev = prepare(args)
+    try:
+        execute(args, method, ev)
+    except KeyboardInterrupt:
+        print("tune: interrupted; running runs killed; re-run the same command to resume", file=sys.stderr)
+        return 130
     return 0
