@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 from sumo_avoid.control.flocking.terms import PRESETS
 from sumo_avoid.studies import tune
@@ -119,19 +120,27 @@ def write_md(stats: dict, out: pathlib.Path, command: str, settings: str) -> Non
     (out / "table3.md").write_text("\n".join(lines) + "\n")
 
 
-def plot(gens: dict, out_png: pathlib.Path) -> None:
+def plot(gens: dict, stats: dict, out_png: pathlib.Path) -> None:
+    """Per speed: the population's best and mean by generation, the paper's μ_max and μ̄, and (after the
+    last generation) μ̄ ± sd of the best candidate and of the paper's parameters on the fresh seeds."""
     fig = Figure(figsize=(4 * len(gens), 3.6))
     FigureCanvasAgg(fig)
     axes = np.atleast_1d(fig.subplots(1, len(gens), sharey=True))
     for ax, (v, g) in zip(axes, gens.items()):
-        ax.plot(g["generation"], g["best_mu"], "b-o", ms=4, label="population best")
+        s, end = stats[v], float(g["generation"].max())
+        ax.plot(g["generation"], g["best_mu"], "b-o", ms=4, label="population best (K tuning seeds)")
         ax.plot(g["generation"], g["mean_mu"], "g--", label="population mean")
         ax.axhline(PAPER[v]["mu_max"], color="k", ls=":", lw=1, label="paper μ_max")
         ax.axhline(PAPER[v]["mu_mean"], color="0.5", ls="-.", lw=1, label="paper μ̄")
+        ax.errorbar([end + 0.3], [s["mu_mean"]], [s["mu_sd"] or 0.0], fmt="bs", ms=5, capsize=3,
+                    label=f"best, R = {s['R']} fresh seeds")
+        ax.errorbar([end + 0.5], [s["baseline"]["mu_mean"]], [s["baseline"]["mu_sd"] or 0.0], fmt="k^", ms=5,
+                    capsize=3, label="paper's parameters, same seeds")
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
         ax.set_title(f"v_flock = {v} m/s", fontsize=9)
         ax.set_xlabel("generation")
-    axes[0].set_ylabel("μ (mean over the K tuning seeds)")
-    axes[0].legend(fontsize=7)
+    axes[0].set_ylabel("μ")
+    axes[0].legend(fontsize=6, loc="lower left")
     fig.savefig(out_png, dpi=120, bbox_inches="tight")
 
 
@@ -164,7 +173,7 @@ def run(args) -> int:
                 f" per run" + (f", overrides {list(args.overrides)}" if args.overrides else "")
                 + ". The paper: 100 vehicles, 600 s, its GA's budget not stated (N(μ ≥ μ̄) ≈ 2000 candidates).")
     write_md(stats, out, command, settings)
-    plot(gens, out / "convergence.png")
+    plot(gens, stats, out / "convergence.png")
     for v, s in stats.items():
         print(verdict(v, s))
     return 0
