@@ -63,8 +63,9 @@ def rows_of(v: int, s: dict) -> list[dict]:
                                                                                   "n_above_mean")]
     rows += [{"v_flock": v, "quantity": f"paper_params_{q}", "ours": s["baseline"][q]} for q in ("mu_max", "mu_mean",
                                                                                                 "mu_sd")]
-    rows += [{"v_flock": v, "quantity": q, "ours": s[q]} for q in ("tuned_phi_coll_mean", "baseline_phi_coll_mean",
-                                                                    "tuned_collisions_mean", "baseline_collisions_mean")]
+    rows += [{"v_flock": v, "quantity": q, "ours": s[q]}
+             for q in ("tuned_phi_coll_mean", "baseline_phi_coll_mean", "tuned_collisions_mean",
+                       "baseline_collisions_mean")]
     rows.append({"v_flock": v, "quantity": "wilcoxon_p_mu", "ours": s["wilcoxon_mu"]["p"]})
     k = SPEEDS.index(v)
     for n in PARAMS:

@@ -8,6 +8,7 @@ the best candidate and the scenario's own parameters each evaluated on ``--evals
 from __future__ import annotations
 
 import math
+import pathlib
 
 import pandas as pd
 
@@ -72,10 +73,20 @@ def value_of(args):
     return ga.fitness
 
 
+def shown(path) -> str:
+    """A path as a command line would give it here: relative to the working folder when under it."""
+    p = pathlib.Path(path)
+    try:
+        return str(p.resolve().relative_to(pathlib.Path.cwd()))
+    except ValueError:
+        return str(p)
+
+
 def command(args) -> str:
     extra = "".join(f" --bound {n} {lo} {hi}" for n, lo, hi in args.bound)
     extra += "".join(f" --set {s}" for s in args.overrides)
-    return (f"sumo-avoid tune flocking {args.scenario} --generations {args.generations} --pop-size {args.pop_size} "
+    return (f"sumo-avoid tune flocking {shown(args.scenario)} --generations {args.generations} "
+            f"--pop-size {args.pop_size} "
             f"--seeds {args.seeds} --first-seed {args.first_seed} --seed {args.seed} --evals {args.evals} "
             f"--eval-first-seed {args.eval_first_seed}{extra}")
 
@@ -110,7 +121,8 @@ def run(args, ev, bar) -> dict:
     head = (f"# {cmd}\n# best fitness {top['mu']:.6f} (mean mu over seeds {args.first_seed}-"
             f"{args.first_seed + args.seeds - 1}), {len(hist)} candidates; on {args.evals} fresh seeds mu_max "
             f"{stats['mu_max']:.4f}, mean {stats['mu_mean']:.4f} +- {stats['mu_sd']:.4f}\n"
-            "# v_flock_mps and v_max_mps as in the scenario; its preset cleared (a preset replaces keys at their default)")
+            "# v_flock_mps and v_max_mps as in the scenario; its preset cleared (a preset replaces keys at their "
+            "default)")
     (args.out / "tuned.toml").write_text(tuned_toml(best, names, head, p))
     print(f"tune: on {args.evals} fresh seeds mu {stats['mu_mean']:.4f} +- {stats['mu_sd']:.4f} (max "
           f"{stats['mu_max']:.4f}); the scenario's parameters {stats['baseline']['mu_mean']:.4f}; N(mu >= mean) "

@@ -80,7 +80,8 @@ def write(s: dict, out: pathlib.Path, command: str, baseline_name: str) -> None:
              f"| μ_max | {_f(s['mu_max'])} | {_f(s['baseline']['mu_max'])} |",
              f"| μ̄ ± sd | {_f(s['mu_mean'])} ± {_f(s['mu_sd'])} | {_f(s['baseline']['mu_mean'])} ± "
              f"{_f(s['baseline']['mu_sd'])} |",
-             f"| φ_coll (mean) | {_f(s['tuned_phi_coll_mean'], '{:.3g}')} | {_f(s['baseline_phi_coll_mean'], '{:.3g}')} |",
+             f"| φ_coll (mean) | {_f(s['tuned_phi_coll_mean'], '{:.3g}')} | "
+             f"{_f(s['baseline_phi_coll_mean'], '{:.3g}')} |",
              f"| φ_wall (mean, m) | {_f(s['tuned_phi_wall_mean'], '{:.3g}')} | "
              f"{_f(s['baseline_phi_wall_mean'], '{:.3g}')} |",
              f"| footprint collisions per run | {_f(s['tuned_collisions_mean'], '{:.2f}')} | "
@@ -88,7 +89,8 @@ def write(s: dict, out: pathlib.Path, command: str, baseline_name: str) -> None:
              f"Paired Wilcoxon signed-rank (two-sided), μ tuned − {baseline_name}, {w['pairs']} pairs: median "
              f"difference {_f(w['median_diff'], '{:+.4f}')}, W = {_f(w['statistic'], '{:g}')}, p = "
              f"{_f(w['p'], '{:.3g}')}.", "",
-             f"N(μ ≥ μ̄) = {s['n_above_mean']} of {s['n_candidates']} candidates (fitness over the tuning seeds).", "",
+             f"N(μ ≥ μ̄) = {s['n_above_mean']} of {s['n_candidates']} candidates (fitness over the tuning "
+             "seeds).", "",
              "| parameter | best | range among candidates with μ ≥ μ̄ |", "|---|---|---|"]
     for n, r in s["ranges"].items():
         lines.append(f"| {n} | {s['best'][n]:.6g} | " + (f"[{r[0]:.6g}, {r[1]:.6g}]" if r else "–") + " |")

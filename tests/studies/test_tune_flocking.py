@@ -24,8 +24,8 @@ ARENA4, ARENA6 = SCENARIOS / "arena_v4.toml", SCENARIOS / "arena_v6.toml"
 # 5 vehicles starting at v_flock for 3 s: generation 0 and 1 of 4 candidates x 2 seeds, then 2 fresh seeds x
 # (best, scenario's)
 SETS = ("arena.n_agents=5", "arena.initial_speed_mps=4.0", "sim.duration_s=3")
-TINY = ["--generations", "1", "--pop-size", "4", "--seeds", "2", "--evals", "2", *(x for s in SETS for x in ("--set", s)),
-        "--quiet"]
+TINY = ["--generations", "1", "--pop-size", "4", "--seeds", "2", "--evals", "2",
+        *(x for s in SETS for x in ("--set", s)), "--quiet"]
 TINY_RUNS = 4 * 2 + 4 * 2 + 2 * 2
 
 
@@ -35,10 +35,11 @@ def test_default_bounds_are_table3s_hull_widened_by_a_quarter():
     # bounds are kept to 6 significant digits (rel 5e-6)
     # linear: hull [17.3, 63.5] (v4 low, v8 high), width 46.2, 5.775 more on each side
     assert (b["r0_rep_m"].lo, b["r0_rep_m"].hi, b["r0_rep_m"].log) == (11.525, 69.275, False)
-    assert (b["r0_frict_m"].lo, b["r0_frict_m"].hi) == (pytest.approx(51.3 - 7.8375, rel=1e-5), pytest.approx(114 + 7.8375, rel=1e-5))
+    assert (b["r0_frict_m"].lo, b["r0_frict_m"].hi) == (pytest.approx(51.3 - 7.8375, rel=1e-5),
+                                                        pytest.approx(114 + 7.8375, rel=1e-5))
     assert (b["r0_shill_m"].lo, b["r0_shill_m"].hi) == (0.0, pytest.approx(15.1 * 1.125, rel=1e-5))  # stops at 0
     assert (b["a_shill_mps2"].lo, b["a_shill_mps2"].hi, b["a_shill_mps2"].log) == (
-        pytest.approx(1.24 - 1.09375, rel=1e-5), pytest.approx(9.99 + 1.09375, rel=1e-5), False)  # 9.99 / 1.24 = 8.1: linear
+        pytest.approx(1.24 - 1.09375, rel=1e-5), pytest.approx(9.99 + 1.09375, rel=1e-5), False)  # ratio 8.1: linear
     # log: hull [0.03, 0.37] spans 12.3x; an eighth of that ratio's log on each side
     r = 0.37 / 0.03
     assert b["p_rep_ps"].log and b["p_rep_ps"].lo == pytest.approx(0.03 / r ** 0.125, rel=1e-5)
@@ -56,7 +57,8 @@ def test_unit_points_map_linearly_or_log_uniformly_with_six_digits():
     space = (Bound("r0_rep_m", 10.0, 30.0, False), Bound("p_rep_ps", 0.01, 1.0, True))
     v = values([[0.0, 0.0], [0.5, 0.5], [1.0, 1.0], [0.25, 0.123456789]], space)
     assert v[:3].tolist() == [[10.0, 0.01], [20.0, 0.1], [30.0, 1.0]]  # log midpoint = geometric mean
-    assert v[3, 0] == 15.0 and v[3, 1] == 0.0176569  # 10^(-2 + 2 x 0.123456789) = 10^-1.75308642 = e^-4.0366298 = 0.01765690
+    # 10^(-2 + 2 x 0.123456789) = 10^-1.75308642 = e^-4.0366298 = 0.01765690
+    assert v[3, 0] == 15.0 and v[3, 1] == 0.0176569
 
 
 def test_a_candidate_keeps_its_values_where_the_scenario_has_a_preset():
