@@ -3,6 +3,7 @@ import dataclasses
 import io
 import os
 import pathlib
+import sqlite3
 
 import pytest
 
@@ -120,3 +121,42 @@ def pytest_configure(config):
         from sumo_avoid.sensing import occlusion
 
         occlusion.warm()
+
+
+def ledger_rows(db: pathlib.Path) -> int:
+    """Rows in a ledger a running batch writes (0 while it has no table yet)."""
+    if not db.is_file():
+        return 0
+    with contextlib.closing(sqlite3.connect(db)) as con:
+        try:
+            return con.execute("SELECT count(*) FROM runs").fetchone()[0]
+        except sqlite3.OperationalError:
+            return 0
+
+
+def assert_refused(r: CliResult, key: str, out: pathlib.Path) -> None:
+    """Bad input: exit code 2, one line on stderr naming ``key``, nothing written to ``out``."""
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and f"'{key}'" in r.stderr, r.stderr
+    assert not out.exists()
+
+
+def sigkill_at(args, db: pathlib.Path, rows: int) -> None:
+    """Start ``sumo-avoid ARGS`` in a fresh process and SIGKILL it once its ledger ``db`` holds ``rows`` runs
+    (it must not have finished by then); a second later, so that the runs it started are gone too."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    proc = subprocess.Popen([sys.executable, "-m", "sumo_avoid.cli", *map(str, args)], cwd=ROOT,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env={**os.environ, "CI": "true"})
+    try:
+        deadline = time.time() + 120
+        while ledger_rows(db) < rows and proc.poll() is None and time.time() < deadline:
+            time.sleep(0.02)
+        assert proc.poll() is None, "the command finished before it could be killed"
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+    finally:
+        proc.kill()
+    time.sleep(1.0)

@@ -193,6 +193,8 @@ class ScenarioSpec:
     obstacles: tuple[ObstacleConfig, ...] = field_doc((), doc="[[obstacles]] static convex polygons (id, shape)")
     random_obstacles: RandomObstaclesConfig | None = field_doc(
         None, doc="[random_obstacles] table: static obstacles drawn from the seed, added to [[obstacles]]")
+    tune: dict = field_doc(default_factory=dict, doc="[tune.NAME] tables: search bounds of `sumo-avoid tune NAME` "
+                                                     "(flocking: KEY = [LO, HI] per [controllers.flocking] key)")
 
     def __post_init__(self):
         if not self.ego.ids and (self.arena is None or self.arena.n_agents == 0):

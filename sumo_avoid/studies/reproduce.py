@@ -28,7 +28,7 @@ from sumo_avoid.core.output_error import OutputError, writing
 from sumo_avoid.runs import worker
 from sumo_avoid.runs.job import RunJob
 from sumo_avoid.scenario import spec as scenario
-from sumo_avoid.studies import formation_study
+from sumo_avoid.studies import formation_study, table3
 from sumo_avoid.studies.batch import MAX_SEEDS
 from sumo_avoid.studies.files import make_dirs, remove_dirs, write_atomic
 from sumo_avoid.studies.table4 import EXTRA, PAPER, ROOT, SPEEDS, table4_job
@@ -153,9 +153,10 @@ def reproduce_table4(seeds: int = 20, agents: int = 100, duration: float = 600.0
 
 def add_parser(sub) -> None:
     r = sub.add_parser("reproduce", help="reproduce a seed paper's experiment inside SUMO (table4: flocking; "
-                                         "formation: fixed vs Lévy-tuned gains, docs/formation.md)")
-    r.add_argument("what", choices=["table4", "formation"])
-    r.add_argument("--seeds", type=int, default=20, help="seeds per speed (default 20)")
+                                         "table3: the flocking GA's tuning; formation: fixed vs Lévy-tuned gains, "
+                                         "docs/formation.md)")
+    r.add_argument("what", choices=["table4", "table3", "formation"])
+    r.add_argument("--seeds", type=int, default=20, help="seeds per speed (table3: R fresh seeds; default 20)")
     r.add_argument("--first-seed", type=int, default=1)
     r.add_argument("--agents", type=int, default=100, help="flock size N (default 100)")
     r.add_argument("--duration", type=float, default=600.0, help="run time, s (default 600)")
@@ -163,7 +164,7 @@ def add_parser(sub) -> None:
     r.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a scenario value in all runs, e.g. controllers.flocking.speed_rule=cutoff")
     r.add_argument("--out", type=pathlib.Path, default=None, help="output folder (default reports/table4, "
-                                                                  "reports/formation)")
+                                                                  "reports/table3, reports/formation)")
     f = r.add_argument_group("formation")
     f.add_argument("--tuned", type=pathlib.Path, default=ROOT / "reports" / "formation" / "tune" / "tuned.toml",
                    help="tuned.toml of sumo-avoid tune (default reports/formation/tune/tuned.toml)")
@@ -172,10 +173,11 @@ def add_parser(sub) -> None:
                                                                "scenarios' 40)")
     f.add_argument("--scenarios", nargs="*", type=pathlib.Path, default=[], help="formation: scenario files "
                                                                                  "(default the three goals)")
-    f.add_argument("--workers", type=int, default=None, help="formation: parallel runs (default: CPU count)")
-    f.add_argument("--scheduler", default=None, metavar="ADDRESS", help="formation: run on a Dask cluster")
+    f.add_argument("--workers", type=int, default=None, help="formation, table3: parallel runs (default: CPU count)")
+    f.add_argument("--scheduler", default=None, metavar="ADDRESS", help="formation, table3: run on a Dask cluster")
     f.add_argument("--retry-failed", action="store_true", help="formation: re-run runs the ledger has as failed "
                                                                "(e.g. a worker killed from outside)")
+    table3.add_arguments(r)
     r.set_defaults(func=_cmd)
 
 
@@ -183,6 +185,9 @@ def _cmd(args) -> int:
     if args.what == "formation":
         args.seeds, args.out = args.seed_list, args.out or ROOT / "reports" / "formation"
         return formation_study.run(args)
+    if args.what == "table3":
+        check_table4(args)
+        return table3.run(args)
     check_table4(args)
     made = make_dirs(args.out or ROOT / "reports" / "table4", "--out")
     try:

@@ -3,24 +3,13 @@ on real libsumo a tiny search that resumes after SIGKILL to the same result (the
 Dask cluster: tests/studies/test_dask.py)."""
 from __future__ import annotations
 
-import contextlib
-import os
-import pathlib
-import signal
-import sqlite3
-import subprocess
-import sys
-import time
-
 import pandas as pd
 import pytest
-from conftest import GAP, TINY_TUNE, cli_in_process
+from conftest import GAP, TINY_TUNE, assert_refused, cli_in_process, ledger_rows, sigkill_at
 
 from sumo_avoid.cli import main
 from sumo_avoid.studies import ledger
-from sumo_avoid.studies.tune import FAILED_SCORE, gains, score
-
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+from sumo_avoid.studies.tune_formation import FAILED_SCORE, gains, score
 
 
 def test_gains_are_log_uniform_with_six_digits():
@@ -44,39 +33,16 @@ def test_score_means_penalised_runs_and_fails_high():
 ])
 def test_bad_tune_input_is_one_line(tmp_path, args, key):
     r = cli_in_process(*args, "--out", tmp_path / "out")
-    assert r.returncode == 2 and r.stderr.count("\n") == 1 and f"'{key}'" in r.stderr, r.stderr
-    assert not (tmp_path / "out").exists()
+    assert_refused(r, key, tmp_path / "out")
 
-
-def _rows(db) -> int:
-    if not db.is_file():
-        return 0
-    with contextlib.closing(sqlite3.connect(db)) as con:
-        try:
-            return con.execute("SELECT count(*) FROM runs").fetchone()[0]
-        except sqlite3.OperationalError:
-            return 0
 
 
 def test_tuner_resumes_after_sigkill_to_the_same_result(tmp_path):
     a, b = tmp_path / "a", tmp_path / "b"
     assert main(["tune", "formation", str(GAP), *TINY_TUNE, "--workers", "2", "--out", str(a)]) == 0
     # 3 nests x 2 seeds initial, 3 x 2 Levy eggs, round(0.75) = 1 x 2 abandoned: 14 runs
-    assert _rows(a / "ledger.sqlite") == 14
-    cmd = [sys.executable, "-m", "sumo_avoid.cli", "tune", "formation", str(GAP), *TINY_TUNE, "--workers", "2",
-           "--out", str(b)]
-    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                            env={**os.environ, "CI": "true"})
-    try:
-        deadline = time.time() + 120
-        while _rows(b / "ledger.sqlite") < 4 and proc.poll() is None and time.time() < deadline:
-            time.sleep(0.05)
-        assert proc.poll() is None, "the tuner finished before it could be killed"
-        proc.send_signal(signal.SIGKILL)
-        proc.wait()
-    finally:
-        proc.kill()
-    time.sleep(1.0)
+    assert ledger_rows(a / "ledger.sqlite") == 14
+    sigkill_at(["tune", "formation", str(GAP), *TINY_TUNE, "--workers", "2", "--out", str(b)], b / "ledger.sqlite", 4)
     before = ledger.row_hashes(b / "ledger.sqlite")
     assert 4 <= len(before) < 14 and not (b / "tuned.toml").exists()
     assert main(["tune", "formation", str(GAP), *TINY_TUNE, "--workers", "2", "--out", str(b)]) == 0
