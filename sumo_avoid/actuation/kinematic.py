@@ -23,6 +23,8 @@ from sumo_avoid.core.snapshot import Snapshot
 from sumo_avoid.core.types import Motion, Observation
 
 _REVERSE_ANGLE = np.radians(90.0)
+#: A car this slow (m/s) whose desired velocity lies more than 90 degrees off its heading reverses.
+REVERSE_BELOW_MPS = 0.3
 
 
 @dataclass(frozen=True)
@@ -51,7 +53,7 @@ def actuate(pos, heading, speed, v_des, limits: KinematicParams, dt_s: float) ->
     theta_des = np.where(moving_wish, np.arctan2(v_des[:, 1], v_des[:, 0]), heading)
     err = wrap_angle(theta_des - heading)
 
-    reverse = (limits.max_reverse_speed_mps > 0) & moving_wish & (np.abs(err) > _REVERSE_ANGLE) & (speed <= 0.3)
+    reverse = (limits.max_reverse_speed_mps > 0) & moving_wish & (np.abs(err) > _REVERSE_ANGLE) & (speed <= REVERSE_BELOW_MPS)
     err_used = np.where(reverse, wrap_angle(theta_des + np.pi - heading), err)
     target = np.where(
         reverse,

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sumo_avoid.actuation.kinematic import REVERSE_BELOW_MPS
 from sumo_avoid.control.base_controller import BaseController
 from sumo_avoid.control.road_view import FrenetScene, RoadView
 from sumo_avoid.core.config import field_doc
@@ -79,10 +80,6 @@ class ApfParams:
     max_lat_speed_mps: float = field_doc(1.5, doc="moving forward, the commanded speed across the road stays below this, m/s")
     curve_lat_accel_mps2: float = field_doc(2.5, doc="speed for the road ahead: lateral acceleration in bends, m/s^2")
     curve_decel_mps2: float = field_doc(3.0, doc="speed for the road ahead: braking before a bend, m/s^2")
-
-
-#: Standing: the kinematic actuator reverses a car this slow whose command lies behind it, m/s.
-STANDING_MPS = 0.3
 
 
 @dataclass(frozen=True)
@@ -282,7 +279,7 @@ class ApfDriver:
             # the field pushes it back: moving, the car brakes (and steers towards it); standing, the
             # actuator would reverse it towards it -- only where it may (``may_reverse``: it sees behind
             # and nothing is there; a front radar alone does not see the car queued behind it, Bologna)
-            if not may_reverse and speed_mps <= STANDING_MPS:
+            if not may_reverse and speed_mps <= REVERSE_BELOW_MPS:
                 return np.zeros(2)
             return speed * np.array([np.cos(course), np.sin(course)])
         # a car going forward steers at most max_course off the road's direction and moves across
