@@ -134,7 +134,10 @@ def check_out_file(path, flag: str) -> None:
 
 
 def _not_writable(folder) -> str:
-    """The operating system's reason a folder ``os.access`` finds not writable."""
+    """The operating system's reason a folder ``os.access`` finds not writable (it may have vanished
+    since it was made or found)."""
+    if not os.path.isdir(folder):
+        return os.strerror(errno.ENOENT)
     try:
         read_only = bool(os.statvfs(folder).f_flag & os.ST_RDONLY)
     except OSError:
