@@ -75,13 +75,16 @@ def run(scn, *, log_file=None, progress: bool = False, callbacks=()) -> RunResul
         ssm_file = pathlib.Path(tmp) / "ssm.xml"
         args = sumo_args(scn.net_file, scn.route_files, scn.additional_files, spec.sim.step_s, spec.sim.seed,
                          spec.sim.lateral_resolution_m, log_file, sumo_collisions=spec.sim.sumo_collisions and arena is None,
-                         ssm=SsmRequest(tuple(spec.ego.ids), ssm_file, ssm) if ssm else None)
+                         ssm=SsmRequest(tuple(spec.ego.ids), ssm_file, ssm) if ssm else None,
+                         begin_s=spec.sim.begin_s, options=scn.sumo_options)
         t_loop = time.perf_counter()
         try:
             sim = SumoSim(args)
         except SumoStartError as e:
             raise sumo_load_error(scn, str(e), at_start=True) from None
         with sim:
+            for note in scn.notes:
+                sim.note(note)
             stack = assemble(scn, context(scn, sim.step_s, road, walls, obstacles), controller)
             for hook in hooks:
                 hook.setup(sim)
