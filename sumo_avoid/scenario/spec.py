@@ -53,7 +53,7 @@ class SimConfig:
     net: str = field_doc(doc="SUMO network file (.net.xml), relative to the scenario file")
     sumocfg: str = field_doc("", doc="SUMO configuration (.sumocfg), relative to the scenario file: its net, route and "
                                      "additional files, step length, begin/end, seed and other options fill the [sim] "
-                                     "keys not given here (docs/scenario_format.md, SUMO configurations)")
+                                     "keys not given here (SUMO configurations, above)")
     routes: tuple[str, ...] = field_doc((), doc="SUMO route files (types, vehicles, flows), relative paths")
     additional: tuple[str, ...] = field_doc((), doc="SUMO additional files (polygons, detectors), relative paths")
     step_s: float = field_doc(0.1, doc="simulation step, s")

@@ -64,15 +64,16 @@ def merge(data: dict, base: pathlib.Path, file: str) -> tuple[dict, tuple[str, .
     cfg = (base / rel).resolve()
     if not cfg.is_file():
         raise ScenarioError(file, "sim.sumocfg", "an existing SUMO configuration file", rel)
+    shown = file if is_sumocfg(file) else str(cfg)  # the configuration as the user named it
     try:
         opts = read_config(cfg)
     except OptionError as e:
-        raise ScenarioError(str(cfg), e.option, e.expected, e.got, show_got=e.show_got) from None
+        raise ScenarioError(shown, e.option, e.expected, e.got, show_got=e.show_got) from None
     filled, notes, passed = {}, [], {}
     for name, value in opts.items():
         why = owned(option(name))
         if name in MAPPED:
-            filled[MAPPED[name]] = _sim_value(name, value, base, cfg)
+            filled[MAPPED[name]] = _sim_value(name, value, base, shown)
         elif why is not None:
             notes.append(f"sumo-avoid: option '{name}' of {cfg.name} not used: {why}")
         else:
@@ -81,26 +82,26 @@ def merge(data: dict, base: pathlib.Path, file: str) -> tuple[dict, tuple[str, .
     begin = sim.get("begin_s", filled.get("begin_s", 0.0))
     if end is not None and end >= 0 and "duration_s" not in sim:
         if isinstance(begin, (int, float)) and end <= begin:
-            raise ScenarioError(str(cfg), "end", f"an end after the begin ({begin:g} s)", opts["end"])
+            raise ScenarioError(shown, "end", f"an end after the begin ({begin:g} s)", opts["end"])
         filled["duration_s"] = end - begin if isinstance(begin, (int, float)) else end
     options = sim.get("options", {})
     merged = {**passed, **options} if isinstance(options, dict) else options  # a wrong type: build() says so
     if "net" not in sim and "net" not in filled:
-        raise ScenarioError(str(cfg), "net-file", "a SUMO network file (option net-file) in the configuration, "
+        raise ScenarioError(shown, "net-file", "a SUMO network file (option net-file) in the configuration, "
                                                   "or sim.net", show_got=False)
     return {**data, "sim": {**filled, **sim, "options": merged}}, tuple(notes), cfg
 
 
-def _sim_value(name: str, value: str, base: pathlib.Path, cfg: pathlib.Path):
+def _sim_value(name: str, value: str, base: pathlib.Path, cfg: str):
     """The ``[sim]`` value of a mapped configuration option (paths relative to the scenario's folder)."""
     if name in ("net-file", "route-files", "additional-files"):
         files = split_files(value)
         for f in files:
             if not pathlib.Path(f).is_file():
-                raise ScenarioError(str(cfg), name, "existing files (relative to the configuration's folder)", f)
+                raise ScenarioError(cfg, name, "existing files (relative to the configuration's folder)", f)
         rel = [os.path.relpath(f, base) for f in files]
         if name == "net-file" and len(rel) != 1:
-            raise ScenarioError(str(cfg), name, "one network file", value)
+            raise ScenarioError(cfg, name, "one network file", value)
         return rel[0] if name == "net-file" else rel
     if name == "seed":
         return int(value)
