@@ -132,7 +132,7 @@ class Registry:
 
     def _entry(self, name: str, obj: Any, origin: str) -> Entry:
         if not callable(obj):
-            raise PluginNotFound(f"{name} is a {type(obj).__name__}, not a {self.kind} class")
+            raise PluginNotFound(f"{name} is not a {self.kind} class or function (a {type(obj).__name__})")
         params = getattr(obj, "Params", None)
         if params is not None and not (isinstance(params, type) and dataclasses.is_dataclass(params)
                                        and params.__dataclass_params__.frozen):
