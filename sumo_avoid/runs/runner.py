@@ -52,6 +52,13 @@ def never_departed_error(scn, missing: list[str], time_s: float, waiting) -> Sce
                                              f"t={time_s:.1f} s ({why}){more}", show_got=False)
 
 
+def load_error(scn, message: str, at_start: bool = False) -> ScenarioError:
+    """SUMO's refusal of the scenario's files (:func:`sumo_load_error`), naming the SUMO configuration's
+    option when the file came from one."""
+    err = sumo_load_error(scn, message, at_start)
+    return scn.sumocfg.rename(err) if scn.sumocfg else err
+
+
 def run(scn, *, log_file=None, progress: bool = False, callbacks=()) -> RunResult:
     """Run one scenario. Raises :class:`ScenarioError` (one line, naming the scenario file and key)
     for input found bad only once SUMO runs: files SUMO cannot load (at the start or when it gets to
@@ -81,9 +88,9 @@ def run(scn, *, log_file=None, progress: bool = False, callbacks=()) -> RunResul
         try:
             sim = SumoSim(args)
         except SumoStartError as e:
-            raise sumo_load_error(scn, str(e), at_start=True) from None
+            raise load_error(scn, str(e), at_start=True) from None
         with sim:
-            for note in scn.notes:
+            for note in scn.sumocfg.notes if scn.sumocfg else ():
                 sim.note(note)
             stack = assemble(scn, context(scn, sim.step_s, road, walls, obstacles), controller)
             for hook in hooks:
@@ -94,7 +101,7 @@ def run(scn, *, log_file=None, progress: bool = False, callbacks=()) -> RunResul
             except FieldError as e:  # a goal edge not on the route SUMO gave the ego
                 raise ScenarioError(str(scn.path), e.key, e.expected, e.got, show_got=e.show_got) from None
             except SumoStepError as e:  # input SUMO rejects only when it gets to it
-                raise sumo_load_error(scn, str(e)) from None
+                raise load_error(scn, str(e)) from None
             sim_time = sim.time_s
             if egos.never_departed():
                 raise never_departed_error(scn, egos.never_departed(), sim_time, sim.waiting())

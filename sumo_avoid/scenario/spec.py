@@ -236,9 +236,8 @@ class Scenario:
     route_files: tuple[pathlib.Path, ...]
     additional_files: tuple[pathlib.Path, ...]
     tables: dict  # "KIND.NAME" -> frozen params dataclass, for every registered plug-in with parameters
-    sumocfg: pathlib.Path | None = None  # the SUMO configuration sim.sumocfg names (or the scenario itself)
+    sumocfg: sumocfg.SumoConfig | None = None  # the SUMO configuration sim.sumocfg names (or the scenario itself)
     sumo_options: tuple[tuple[str, str], ...] = ()  # sim.options for SUMO's command line (canonical names)
-    notes: tuple[str, ...] = ()  # for sumo.log: the configuration's options the plug-in owns, left out
 
     @property
     def name(self) -> str:
@@ -328,7 +327,7 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
         raise ScenarioError(file, "--ego", "the id of a vehicle of the configuration's route files for the plug-in "
                                            "to drive (--ego ID, repeatable)", show_got=False)
     base = path.resolve().parent
-    data, notes, cfg = sumocfg.merge(data, base, file)
+    data, cfg = sumocfg.merge(data, base, file)
     check_renamed(data, file)
     spec = build(ScenarioSpec, data, file)
     if spec.random_obstacles is not None:
@@ -348,10 +347,13 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     net = existing(spec.sim.net, "sim.net", "SUMO network")
     routes = tuple(existing(r, f"sim.routes[{i}]", "SUMO route") for i, r in enumerate(spec.sim.routes))
     adds = tuple(existing(r, f"sim.additional[{i}]", "SUMO additional") for i, r in enumerate(spec.sim.additional))
-    check_sumo_inputs(spec, net, routes, adds, file)
+    try:
+        check_sumo_inputs(spec, net, routes, adds, file)
+    except ScenarioError as e:
+        raise (cfg.rename(e) if cfg else e) from None
     check_ego_ids(spec, routes + adds, file)
     check_goals(spec, net, file)
-    scn = Scenario(spec, path, net, routes, adds, tables, cfg, options, notes)
+    scn = Scenario(spec, path, net, routes, adds, tables, cfg, options)
     check_ego_keys(spec, scn.controller_params, file)
     if spec.arena is not None:
         check_arena(spec, file)

@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 import os
 import pathlib
+from dataclasses import dataclass
 
 from sumo_avoid.core.config import ScenarioError
 from sumo_avoid.sumo.options import Option, OptionError, check_value, option, parse_time, read_config, split_files
@@ -36,6 +37,23 @@ _SECTIONS = {
 }
 
 
+@dataclass(frozen=True)
+class SumoConfig:
+    """The configuration a scenario was read from."""
+
+    path: pathlib.Path  # absolute
+    shown: str  # as the user named it (the scenario itself) or absolute (sim.sumocfg)
+    notes: tuple[str, ...]  # for sumo.log: its options the plug-in owns, left out
+    files: tuple[tuple[str, str], ...]  # ("sim.routes", "route-files"): [sim] keys taken from its file options
+
+    def rename(self, err: ScenarioError) -> ScenarioError:
+        """``err`` about a file the configuration named, as an error of the configuration's option."""
+        option = dict(self.files).get(err.key.partition("[")[0])
+        if option is None:
+            return err
+        return ScenarioError(self.shown, option, err.expected, err.got, show_got=err.show_got)
+
+
 def is_sumocfg(path) -> bool:
     return pathlib.Path(path).suffix == SUFFIX
 
@@ -52,12 +70,12 @@ def owned(opt: Option) -> str | None:
     return _SECTIONS.get(opt.section)
 
 
-def merge(data: dict, base: pathlib.Path, file: str) -> tuple[dict, tuple[str, ...], pathlib.Path | None]:
-    """(data with ``[sim]`` filled from its ``sim.sumocfg``, the notes for sumo.log, the configuration's
-    path); ``data`` unchanged when it names no configuration. ``base``: the scenario file's folder."""
+def merge(data: dict, base: pathlib.Path, file: str) -> tuple[dict, SumoConfig | None]:
+    """(data with ``[sim]`` filled from its ``sim.sumocfg``, the configuration); ``data`` unchanged and
+    None when it names no configuration. ``base``: the scenario file's folder."""
     sim = data.get("sim")
     if not isinstance(sim, dict) or "sumocfg" not in sim:
-        return data, (), None
+        return data, None
     rel = sim["sumocfg"]
     if not isinstance(rel, str) or not rel:
         raise ScenarioError(file, "sim.sumocfg", "the path of a SUMO configuration (.sumocfg)", rel)
@@ -89,7 +107,9 @@ def merge(data: dict, base: pathlib.Path, file: str) -> tuple[dict, tuple[str, .
     if "net" not in sim and "net" not in filled:
         raise ScenarioError(shown, "net-file", "a SUMO network file (option net-file) in the configuration, "
                                                   "or sim.net", show_got=False)
-    return {**data, "sim": {**filled, **sim, "options": merged}}, tuple(notes), cfg
+    files = tuple((f"sim.{MAPPED[n]}", n) for n in ("net-file", "route-files", "additional-files")
+                  if n in opts and MAPPED[n] not in sim)
+    return {**data, "sim": {**filled, **sim, "options": merged}}, SumoConfig(cfg, shown, tuple(notes), files)
 
 
 def _sim_value(name: str, value: str, base: pathlib.Path, cfg: str):

@@ -112,8 +112,8 @@ def plan(scenario_path, seed: int, overrides=(), controller=None) -> RunSpec:
     h = hashlib.sha256(KEY_VERSION)
     for f in (path, scn.net_file, *scn.route_files, *scn.additional_files):
         h.update(_file_digest(f))
-    if scn.sumocfg is not None and scn.sumocfg != path:  # sim.sumocfg: its options are the run's too
-        h.update(_file_digest(scn.sumocfg))
+    if scn.sumocfg is not None and scn.sumocfg.path != path:  # sim.sumocfg: its options are the run's too
+        h.update(_file_digest(scn.sumocfg.path))
     # "inject_crash": None is part of every key, so that keys match those of the ledgers in reports/;
     # test-only crash injection itself lives outside the key (runs/faults.py)
     h.update(json.dumps({"overrides": list(overrides), "controller": scn.spec.ego.controller,

@@ -64,6 +64,8 @@ def overtaking_cfg(tmp_path, body: str, name="city.sumocfg") -> pathlib.Path:
     shutil.copy(ROOT / "nets" / "overtaking.net.xml", tmp_path / "files")
     rou = (SCENARIOS / "overtaking.rou.xml").read_text().replace('depart="0"', 'depart="2"')
     (tmp_path / "files" / "late.rou.xml").write_text(rou)
+    (tmp_path / "files" / "bad.rou.xml").write_text('<routes><vehicle id="ego" depart="2"><route edges="nowhere"/>'
+                                                     '</vehicle></routes>\n')
     (tmp_path / "cfg").mkdir(exist_ok=True)
     path = tmp_path / "cfg" / name
     path.write_text(f"<configuration>\n{body}\n</configuration>\n")
@@ -105,6 +107,8 @@ BAD = {  # configuration body, key named, what the line says
                  "true or false"),
     "missing_route_file": (FILES.replace("late.rou.xml", "late.rou.xml gone.rou.xml"), "route-files",
                            "existing files"),
+    "route_file_sumo_refuses": (FILES.replace("late.rou.xml", "bad.rou.xml"), "route-files",
+                                "a file SUMO can load"),
     "end_before_begin": (FILES + '<time><begin value="10"/><end value="5"/></time>', "end", "an end after the begin"),
     "no_net": ('<input><route-files value="../files/late.rou.xml"/></input>', "net-file", "a SUMO network file"),
     "syntax": (FILES + "<time>", "<syntax>", "XML"),
