@@ -329,7 +329,7 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     base = path.resolve().parent
     data, cfg = sumocfg.merge(data, base, file)
     check_renamed(data, file)
-    spec = build(ScenarioSpec, data, file)
+    spec = sumocfg.checked(cfg, build, ScenarioSpec, data, file)  # a value a SUMO configuration gave: its option
     if spec.random_obstacles is not None:
         spec = _with_random_obstacles(spec, file)
     check_choices(spec.ego, file)
@@ -347,10 +347,7 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     net = existing(spec.sim.net, "sim.net", "SUMO network")
     routes = tuple(existing(r, f"sim.routes[{i}]", "SUMO route") for i, r in enumerate(spec.sim.routes))
     adds = tuple(existing(r, f"sim.additional[{i}]", "SUMO additional") for i, r in enumerate(spec.sim.additional))
-    try:
-        check_sumo_inputs(spec, net, routes, adds, file)
-    except ScenarioError as e:
-        raise (cfg.rename(e) if cfg else e) from None
+    sumocfg.checked(cfg, check_sumo_inputs, spec, net, routes, adds, file)
     check_ego_ids(spec, routes + adds, file)
     check_goals(spec, net, file)
     scn = Scenario(spec, path, net, routes, adds, tables, cfg, options)

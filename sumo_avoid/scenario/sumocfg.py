@@ -44,14 +44,22 @@ class SumoConfig:
     path: pathlib.Path  # absolute
     shown: str  # as the user named it (the scenario itself) or absolute (sim.sumocfg)
     notes: tuple[str, ...]  # for sumo.log: its options the plug-in owns, left out
-    files: tuple[tuple[str, str], ...]  # ("sim.routes", "route-files"): [sim] keys taken from its file options
+    keys: tuple[tuple[str, str], ...]  # ("sim.routes", "route-files"): [sim] keys taken from its options
 
     def rename(self, err: ScenarioError) -> ScenarioError:
-        """``err`` about a file the configuration named, as an error of the configuration's option."""
-        option = dict(self.files).get(err.key.partition("[")[0])
+        """``err`` about a value or file the configuration gave, as an error of the configuration's option."""
+        option = dict(self.keys).get(err.key.partition("[")[0])
         if option is None:
             return err
         return ScenarioError(self.shown, option, err.expected, err.got, show_got=err.show_got)
+
+
+def checked(cfg: SumoConfig | None, check, *args):
+    """``check(*args)``, its :class:`ScenarioError` about a value the configuration gave renamed to its option."""
+    try:
+        return check(*args)
+    except ScenarioError as e:
+        raise (cfg.rename(e) if cfg else e) from None
 
 
 def is_sumocfg(path) -> bool:
@@ -107,9 +115,8 @@ def merge(data: dict, base: pathlib.Path, file: str) -> tuple[dict, SumoConfig |
     if "net" not in sim and "net" not in filled:
         raise ScenarioError(shown, "net-file", "a SUMO network file (option net-file) in the configuration, "
                                                   "or sim.net", show_got=False)
-    files = tuple((f"sim.{MAPPED[n]}", n) for n in ("net-file", "route-files", "additional-files")
-                  if n in opts and MAPPED[n] not in sim)
-    return {**data, "sim": {**filled, **sim, "options": merged}}, SumoConfig(cfg, shown, tuple(notes), files)
+    keys = tuple((f"sim.{MAPPED[n]}", n) for n in opts if n in MAPPED and MAPPED[n] in filled and MAPPED[n] not in sim)
+    return {**data, "sim": {**filled, **sim, "options": merged}}, SumoConfig(cfg, shown, tuple(notes), keys)
 
 
 def _sim_value(name: str, value: str, base: pathlib.Path, cfg: str):

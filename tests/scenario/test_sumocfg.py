@@ -109,6 +109,8 @@ BAD = {  # configuration body, key named, what the line says
                            "existing files"),
     "route_file_sumo_refuses": (FILES.replace("late.rou.xml", "bad.rou.xml"), "route-files",
                                 "a file SUMO can load"),
+    "lateral_resolution": (FILES + '<processing><lateral-resolution value="-1"/></processing>', "lateral-resolution",
+                           "a non-negative number"),
     "end_before_begin": (FILES + '<time><begin value="10"/><end value="5"/></time>', "end", "an end after the begin"),
     "no_net": ('<input><route-files value="../files/late.rou.xml"/></input>', "net-file", "a SUMO network file"),
     "syntax": (FILES + "<time>", "<syntax>", "XML"),
