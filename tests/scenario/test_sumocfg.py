@@ -9,6 +9,7 @@ import shutil
 import subprocess
 import sys
 
+import libsumo
 import pytest
 from conftest import DATA, ROOT, SCENARIOS, cli_in_process
 
@@ -76,16 +77,35 @@ FILES = ('<input><net-file value="../files/overtaking.net.xml"/>'
          '<route-files value="../files/late.rou.xml"/></input>')
 
 
-def test_begin_end_and_step_from_the_configuration(tmp_path):
+class Options:
+    """A rollout callback reading SUMO's options as SUMO took them."""
+
+    def __init__(self, *names):
+        self.names, self.seen = names, {}
+
+    def on_step(self, snap, n_steps):
+        self.seen = self.seen or {n: libsumo.simulation.getOption(n) for n in self.names}
+
+    def on_end(self):
+        pass
+
+
+def test_begin_end_step_and_options_from_the_configuration(tmp_path):
     cfg = overtaking_cfg(tmp_path, FILES + '<time><begin value="2"/><end value="0:00:07"/><step-length value="0.05"/>'
-                                          '</time><random_number><seed value="7"/></random_number>')
+                                          '</time><random_number><seed value="7"/></random_number><processing>'
+                                          '<pedestrian.striping.reserve-oncoming value="0.4"/><time-to-teleport '
+                                          'value="30"/></processing>')
     scn = scenario.load(cfg, ['ego.ids=["ego"]', "output.plots=false"])
     sim = scn.spec.sim
     assert (sim.begin_s, sim.duration_s, sim.step_s, sim.seed) == (2.0, 5.0, 0.05, 7)
     assert scn.net_file == (tmp_path / "files" / "overtaking.net.xml").resolve()
-    res = runner.run(scn)
+    seen = Options("pedestrian.striping.reserve-oncoming", "time-to-teleport", "seed", "begin")
+    res = runner.run(scn, log_file=tmp_path / "sumo.log", callbacks=[seen])
     assert res.steps == 100 and res.sim_time_s == pytest.approx(7.0)
     assert res.traj["time_s"].min() == pytest.approx(2.05)
+    assert seen.seen == {"pedestrian.striping.reserve-oncoming": "0.4", "time-to-teleport": "-1", "seed": "7",
+                         "begin": "2.0"}
+    assert "option 'time-to-teleport' of city.sumocfg not used: " in (tmp_path / "sumo.log").read_text()
 
 
 def test_toml_keys_override_the_configuration(tmp_path):
