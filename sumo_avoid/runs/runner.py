@@ -52,11 +52,14 @@ def never_departed_error(scn, missing: list[str], time_s: float, waiting) -> Sce
                                              f"t={time_s:.1f} s ({why}){more}", show_got=False)
 
 
-def load_error(scn, message: str, at_start: bool = False) -> ScenarioError:
-    """SUMO's refusal of the scenario's files (:func:`sumo_load_error`), naming the SUMO configuration's
-    option when the file came from one."""
-    err = sumo_load_error(scn, message, at_start)
+def named(scn, err: ScenarioError) -> ScenarioError:
+    """``err`` naming the SUMO configuration's option (or ``--ego``) when the value came from one."""
     return scn.sumocfg.rename(err) if scn.sumocfg else err
+
+
+def load_error(scn, message: str, at_start: bool = False) -> ScenarioError:
+    """SUMO's refusal of the scenario's files (:func:`sumo_load_error`), named as :func:`named` does."""
+    return named(scn, sumo_load_error(scn, message, at_start))
 
 
 def run(scn, *, log_file=None, progress: bool = False, callbacks=()) -> RunResult:
@@ -104,7 +107,7 @@ def run(scn, *, log_file=None, progress: bool = False, callbacks=()) -> RunResul
                 raise load_error(scn, str(e)) from None
             sim_time = sim.time_s
             if egos.never_departed():
-                raise never_departed_error(scn, egos.never_departed(), sim_time, sim.waiting())
+                raise named(scn, never_departed_error(scn, egos.never_departed(), sim_time, sim.waiting()))
         t_end = time.perf_counter()
         tables = dict(stack.tables())
         if ssm:  # the file is complete once SUMO has closed

@@ -348,7 +348,7 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     routes = tuple(existing(r, f"sim.routes[{i}]", "SUMO route") for i, r in enumerate(spec.sim.routes))
     adds = tuple(existing(r, f"sim.additional[{i}]", "SUMO additional") for i, r in enumerate(spec.sim.additional))
     sumocfg.checked(cfg, check_sumo_inputs, spec, net, routes, adds, file)
-    check_ego_ids(spec, routes + adds, file)
+    sumocfg.checked(cfg, check_ego_ids, spec, routes + adds, file)
     check_goals(spec, net, file)
     scn = Scenario(spec, path, net, routes, adds, tables, cfg, options)
     check_ego_keys(spec, scn.controller_params, file)

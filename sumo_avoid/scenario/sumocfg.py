@@ -44,7 +44,7 @@ class SumoConfig:
     path: pathlib.Path  # absolute
     shown: str  # as the user named it (the scenario itself) or absolute (sim.sumocfg)
     notes: tuple[str, ...]  # for sumo.log: its options the plug-in owns, left out
-    keys: tuple[tuple[str, str], ...]  # ("sim.routes", "route-files"): [sim] keys taken from its options
+    keys: tuple[tuple[str, str], ...]  # ("sim.routes", "route-files"): keys taken from its options (or flags)
 
     def rename(self, err: ScenarioError) -> ScenarioError:
         """``err`` about a value or file the configuration gave, as an error of the configuration's option."""
@@ -116,6 +116,7 @@ def merge(data: dict, base: pathlib.Path, file: str) -> tuple[dict, SumoConfig |
         raise ScenarioError(shown, "net-file", "a SUMO network file (option net-file) in the configuration, "
                                                   "or sim.net", show_got=False)
     keys = tuple((f"sim.{MAPPED[n]}", n) for n in opts if n in MAPPED and MAPPED[n] in filled and MAPPED[n] not in sim)
+    keys += (("ego.ids", "--ego"),) if is_sumocfg(file) else ()  # the configuration run as it is: its egos are flags
     return {**data, "sim": {**filled, **sim, "options": merged}}, SumoConfig(cfg, shown, tuple(notes), keys)
 
 

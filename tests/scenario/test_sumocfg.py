@@ -166,3 +166,8 @@ def test_bad_sim_options_name_the_key(tmp_path, option, key, says):
 def test_a_configuration_without_egos_asks_for_ego(tmp_path):
     res = cli_in_process("run", overtaking_cfg(tmp_path, FILES), "--out", tmp_path / "out")
     assert res.returncode == 2 and "key '--ego'" in res.stderr and "--ego ID" in res.stderr
+
+
+def test_an_ego_the_configuration_does_not_define_names_the_flag(tmp_path):
+    res = cli_in_process("run", overtaking_cfg(tmp_path, FILES), "--ego", "nobody", "--out", tmp_path / "out")
+    assert res.returncode == 2 and "key '--ego'" in res.stderr and "got 'nobody'" in res.stderr, res.stderr
