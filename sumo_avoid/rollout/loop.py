@@ -15,8 +15,8 @@ from __future__ import annotations
 
 def perceive(sim, stack, egos, recorder, step: int, last: bool):
     """The first half of step ``step``: take over, read, record, retire, sense. Returns
-    ``(snapshot, observation)`` (observation None when no ego is driven), or None when the run is
-    over (``last`` step, or every ego done)."""
+    ``(snapshot, observation, over)``: observation None when no ego is driven or the run is ``over``
+    (the ``last`` step, or every ego done)."""
     for vid in egos.new(sim.departed()):
         stack.add_ego(egos.take_over(sim, vid))
     snap = stack.actuator.held(sim.read())
@@ -24,9 +24,9 @@ def perceive(sim, stack, egos, recorder, step: int, last: bool):
     for vid in egos.retire(sim, snap):
         stack.remove_ego(vid)
     if last or egos.all_done():
-        return None
+        return snap, None, True
     ids = egos.driven(snap)
-    return snap, (stack.sensor.observe(snap, ids, stack.actuator.speeds(snap, ids)) if ids else None)
+    return snap, (stack.sensor.observe(snap, ids, stack.actuator.speeds(snap, ids)) if ids else None), False
 
 
 def act(sim, stack, recorder, step: int, obs) -> None:
@@ -44,12 +44,12 @@ def rollout(sim, stack, egos, recorder, n_steps: int, callbacks=()) -> int:
     """Run up to ``n_steps`` steps (or until every ego is done); returns the last step index."""
     step = 0
     for step in range(n_steps + 1):
-        seen = perceive(sim, stack, egos, recorder, step, step == n_steps)
-        if seen is None:
+        snap, obs, over = perceive(sim, stack, egos, recorder, step, step == n_steps)
+        if over:
             break
-        act(sim, stack, recorder, step, seen[1])
+        act(sim, stack, recorder, step, obs)
         for cb in callbacks:
-            cb.on_step(seen[0], n_steps)
+            cb.on_step(snap, n_steps)
     for cb in callbacks:
         cb.on_end()
     return step

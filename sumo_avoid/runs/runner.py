@@ -82,7 +82,8 @@ class OpenRun:
         obstacles = tuple(o.polygon for o in spec.obstacles)
         self.scene = Scene(road, walls, obstacles)
         ctx = context(scn, spec.sim.step_s, road, walls, obstacles)  # steering limits and tables: assemble.context
-        self.controller = controller_for(scn, ctx) if make_controller is None else make_controller(ctx)
+        with scenario_errors(scn):  # a controller's parameter found bad when it is built (a policy that does not import)
+            self.controller = controller_for(scn, ctx) if make_controller is None else make_controller(ctx)
         self.recorder = Recorder(spec.output.record_radius_m)
         self.hooks = [StaticObstacles(spec.obstacles, obstacles)] + ([ArenaSpawn(arena, walls, obstacles, ctx.rng(1))] if arena else [])
         self.egos = EgoBook(set(spec.ego.ids) | set(arena.ids if arena else ()), road, goal=spec.ego.goal, goals=spec.ego.goals,
