@@ -48,7 +48,7 @@ class PolicyParams:
     route_points: int = field_doc(10, positive=True, doc="points of the route ahead in the observation")
     route_spacing_m: float = field_doc(5.0, positive=True, doc="spacing of those points along the route, m")
     max_speed_mps: float = field_doc(30.0, positive=True, doc="largest v_s of a velocity action, m/s")
-    max_lateral_speed_mps: float = field_doc(3.0, doc="largest |v_d| of a velocity action, m/s")
+    max_lateral_speed_mps: float = field_doc(3.0, doc="largest magnitude of v_d of a velocity action, m/s")
 
     def __post_init__(self):
         if self.action not in ACTIONS:
