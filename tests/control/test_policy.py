@@ -69,3 +69,29 @@ def test_run_refuses_a_policy_it_cannot_load_in_one_line(tmp_path, extra):
                        capture_output=True, text=True)
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "'controllers.policy.policy'" in r.stderr, r.stderr
     assert not out.exists()
+
+
+def test_a_suite_compares_the_scripted_policy_with_apf_sa_on_the_same_runs(tmp_path, capsys):
+    from sumo_avoid.cli import main
+
+    suite = tmp_path / "suite.toml"
+    suite.write_text(f'''[defaults]
+seeds = "1"
+set = ["output.plots=false", "sim.duration_s=8"]
+
+[[entry]]
+name = "apf_sa"
+scenario = "{OVERTAKING.as_posix()}"
+controller = "apf_sa"
+criteria = ["collisions == 0"]
+
+[[entry]]
+name = "keep_lane"
+scenario = "{OVERTAKING.as_posix()}"
+controller = "policy"
+set = ["controllers.policy.policy='sumo_avoid.control.policy_examples:KeepLane'"]
+criteria = ["collisions == 0", "mean_speed_mps_max <= 16"]
+''')
+    rc = main(["suite", str(suite), "--ledger", str(tmp_path / "ledger.sqlite"), "--workers", "2", "--quiet"])
+    out = capsys.readouterr().out
+    assert rc == 0 and "2 of 2 entries passed" in out, out
