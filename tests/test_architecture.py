@@ -68,7 +68,7 @@ ORDER = (
     ("plots",),
     ("scenario",),
     ("runs",),  # one run: runner, outputs, child processes
-    ("studies",),
+    ("studies", "gym"),  # gym: environments stepping a run (optional extra [gym])
     ("cli",),
 )
 LEVEL = {pkg: i for i, pkgs in enumerate(ORDER) for pkg in pkgs}

@@ -117,18 +117,7 @@ class Registry:
         raise PluginNotFound(f"no {self.kind} of that name, built in or an entry point of group {self.group}")
 
     def _by_import_path(self, name: str) -> Entry:
-        module, _, attr = name.partition(":")
-        if not all(p.isidentifier() for p in (*module.split("."), *attr.split("."))):
-            raise PluginNotFound("an import path is MODULE:ATTR, e.g. mypkg.control:MyController")
-        try:
-            obj = importlib.import_module(module)
-        except Exception as e:  # ImportError, or whatever the module raises on import
-            raise PluginNotFound(f"cannot import {module!r}: {_one_line(e)}") from None
-        for part in attr.split("."):
-            if not hasattr(obj, part):
-                raise PluginNotFound(f"module {module!r} has no attribute {attr!r}")
-            obj = getattr(obj, part)
-        return self._entry(name, obj, IMPORT_PATH)
+        return self._entry(name, import_object(name), IMPORT_PATH)
 
     def _entry(self, name: str, obj: Any, origin: str) -> Entry:
         if not callable(obj):
@@ -138,6 +127,29 @@ class Registry:
                                        and params.__dataclass_params__.frozen):
             raise PluginNotFound(f"{name}.Params is not a frozen dataclass")
         return Entry(name, obj, params, origin)
+
+
+def is_import_path(text: str) -> bool:
+    """``text`` has the form MODULE:ATTR (dotted names on both sides)."""
+    module, sep, attr = text.partition(":")
+    return bool(sep) and all(p.isidentifier() for p in (*module.split("."), *attr.split(".")))
+
+
+def import_object(path: str) -> Any:
+    """The object at import path ``"package.module:Attr"`` (``Attr`` may be dotted); raises
+    :class:`PluginNotFound` saying why (one line)."""
+    if not is_import_path(path):
+        raise PluginNotFound("an import path is MODULE:ATTR, e.g. mypkg.control:MyController")
+    module, _, attr = path.partition(":")
+    try:
+        obj = importlib.import_module(module)
+    except Exception as e:  # ImportError, or whatever the module raises on import
+        raise PluginNotFound(f"cannot import {module!r}: {_one_line(e)}") from None
+    for part in attr.split("."):
+        if not hasattr(obj, part):
+            raise PluginNotFound(f"AttributeError: module {module!r} has no attribute {attr!r}")
+        obj = getattr(obj, part)
+    return obj
 
 
 def _origin(ep) -> str:

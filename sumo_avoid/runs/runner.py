@@ -5,6 +5,7 @@ from its recording afterwards (:mod:`sumo_avoid.metrics`) and never feed back in
 """
 from __future__ import annotations
 
+import contextlib
 import pathlib
 import tempfile
 import time
@@ -62,58 +63,107 @@ def load_error(scn, message: str, at_start: bool = False) -> ScenarioError:
     return named(scn, sumo_load_error(scn, message, at_start))
 
 
+@contextlib.contextmanager
+def scenario_errors(scn):
+    """Input found bad only once SUMO runs, as one :class:`ScenarioError` naming the scenario file
+    and key: a goal edge not on the route SUMO gave an ego, an element SUMO rejects when it gets to it."""
+    try:
+        yield
+    except FieldError as e:
+        raise ScenarioError(str(scn.path), e.key, e.expected, e.got, show_got=e.show_got) from None
+    except SumoStepError as e:
+        raise load_error(scn, str(e)) from None
+
+
+class OpenRun:
+    """One run opened to be stepped: SUMO started (``sim``), the scene set up, the plug-ins assembled
+    (``stack``), the egos' book (``egos``) and the ``recorder``; :meth:`result` closes SUMO and
+    returns the :class:`RunResult`. A context manager (SUMO and its SSM file's folder end on exit).
+    :func:`run` rolls it out to the end; the Gymnasium environment steps it with the loop's halves.
+    ``make_controller(ctx)`` builds the controller instead of ``ego.controller``'s registry entry."""
+
+    def __init__(self, scn, *, log_file=None, make_controller=None):
+        spec = self.spec = scn.spec
+        self.scn = scn
+        self.t_start = time.perf_counter()
+        arena = spec.arena
+        road = Road.from_net_file(scn.net_file)
+        walls = square(arena.origin, arena.size_m) if arena is not None else None
+        obstacles = tuple(o.polygon for o in spec.obstacles)
+        self.scene = Scene(road, walls, obstacles)
+        ctx = context(scn, spec.sim.step_s, road, walls, obstacles)  # steering limits and tables: assemble.context
+        with scenario_errors(scn):  # a controller's parameter found bad when it is built (a policy that does not import)
+            self.controller = controller_for(scn, ctx) if make_controller is None else make_controller(ctx)
+        self.recorder = Recorder(spec.output.record_radius_m)
+        self.hooks = [StaticObstacles(spec.obstacles, obstacles)] + ([ArenaSpawn(arena, walls, obstacles, ctx.rng(1))] if arena else [])
+        self.egos = EgoBook(set(spec.ego.ids) | set(arena.ids if arena else ()), road, goal=spec.ego.goal, goals=spec.ego.goals,
+                            goal_tolerance_m=spec.ego.goal_tolerance_m, cruise_speed_mps=spec.ego.cruise_speed_mps,
+                            uses_goals=type(self.controller).needs.goals, follow_routes=arena is None)
+        self.ssm = SsmParams() if arena is None and spec.ego.ids else None  # lanes to measure on: not in an arena
+        self.log_file = log_file
+        self._tmp = None
+        self.sim = None
+
+    def __enter__(self) -> OpenRun:
+        spec, scn, scene = self.spec, self.scn, self.scene
+        self._tmp = tempfile.TemporaryDirectory(prefix="sumo-avoid-run-")  # SUMO's SSM file; gone afterwards
+        self.ssm_file = pathlib.Path(self._tmp.name) / "ssm.xml"
+        args = sumo_args(scn.net_file, scn.route_files, scn.additional_files, spec.sim.step_s, spec.sim.seed,
+                         spec.sim.lateral_resolution_m, self.log_file,
+                         sumo_collisions=spec.sim.sumo_collisions and spec.arena is None,
+                         ssm=SsmRequest(tuple(spec.ego.ids), self.ssm_file, self.ssm) if self.ssm else None,
+                         begin_s=spec.sim.begin_s, options=scn.sumo_options)
+        self.t_loop = time.perf_counter()
+        try:
+            self.sim = SumoSim(args)
+        except SumoStartError as e:
+            self._tmp.cleanup()
+            raise load_error(scn, str(e), at_start=True) from None
+        try:
+            for note in scn.sumocfg.notes if scn.sumocfg else ():
+                self.sim.note(note)
+            self.stack = assemble(scn, context(scn, self.sim.step_s, scene.road, scene.walls, scene.obstacles),
+                                  self.controller)
+            for hook in self.hooks:
+                hook.setup(self.sim)
+        except BaseException:
+            self.__exit__()
+            raise
+        self.n_steps = int(round(spec.sim.duration_s / self.sim.step_s))
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self.sim is not None:
+            self.sim.close()
+        if self._tmp is not None:
+            self._tmp.cleanup()
+
+    def result(self, steps: int) -> RunResult:
+        """Close SUMO and return the run's recording; raises :class:`ScenarioError` for an ego that never
+        departed."""
+        sim, egos, recorder = self.sim, self.egos, self.recorder
+        sim_time = sim.time_s
+        if egos.never_departed():
+            raise named(self.scn, never_departed_error(self.scn, egos.never_departed(), sim_time, sim.waiting()))
+        sim.close()
+        t_end = time.perf_counter()
+        tables = dict(self.stack.tables())
+        if self.ssm:  # the file is complete once SUMO has closed
+            tables["ssm_conflicts"] = read_conflicts(self.ssm_file)
+        return RunResult(self.scn, self.scene, recorder.table(), recorder.sumo_events(), egos.goals,
+                         steps, sim_time, self.stack.stats(),
+                         {"setup_s": self.t_loop - self.t_start, "loop_s": t_end - self.t_loop, "total_s": t_end - self.t_start},
+                         tables, egos.tasks, recorder.signals(), ssm=self.ssm, persons=recorder.persons(),
+                         classes=recorder.classes())
+
+
 def run(scn, *, log_file=None, progress: bool = False, callbacks=()) -> RunResult:
     """Run one scenario. Raises :class:`ScenarioError` (one line, naming the scenario file and key)
     for input found bad only once SUMO runs: files SUMO cannot load (at the start or when it gets to
     an element, e.g. an invalid departLane), a goal edge not on an ego's route, an ego that never departed.
     ``callbacks``: more rollout callbacks (``on_step``, ``on_end``) beside the progress bar."""
-    spec = scn.spec
-    t_start = time.perf_counter()
-    arena = spec.arena
-    road = Road.from_net_file(scn.net_file)
-    walls = square(arena.origin, arena.size_m) if arena is not None else None
-    obstacles = tuple(o.polygon for o in spec.obstacles)
-    ctx = context(scn, spec.sim.step_s, road, walls, obstacles)  # steering limits and tables: assemble.context
-    controller = controller_for(scn, ctx)
-    recorder = Recorder(spec.output.record_radius_m)
-    hooks = [StaticObstacles(spec.obstacles, obstacles)] + ([ArenaSpawn(arena, walls, obstacles, ctx.rng(1))] if arena else [])
-    egos = EgoBook(set(spec.ego.ids) | set(arena.ids if arena else ()), road, goal=spec.ego.goal, goals=spec.ego.goals,
-                   goal_tolerance_m=spec.ego.goal_tolerance_m, cruise_speed_mps=spec.ego.cruise_speed_mps,
-                   uses_goals=type(controller).needs.goals, follow_routes=arena is None)
-    ssm = SsmParams() if arena is None and spec.ego.ids else None  # lanes to measure on: not in an arena
-    with tempfile.TemporaryDirectory(prefix="sumo-avoid-run-") as tmp:  # SUMO's SSM file; gone afterwards
-        ssm_file = pathlib.Path(tmp) / "ssm.xml"
-        args = sumo_args(scn.net_file, scn.route_files, scn.additional_files, spec.sim.step_s, spec.sim.seed,
-                         spec.sim.lateral_resolution_m, log_file, sumo_collisions=spec.sim.sumo_collisions and arena is None,
-                         ssm=SsmRequest(tuple(spec.ego.ids), ssm_file, ssm) if ssm else None,
-                         begin_s=spec.sim.begin_s, options=scn.sumo_options)
-        t_loop = time.perf_counter()
-        try:
-            sim = SumoSim(args)
-        except SumoStartError as e:
-            raise load_error(scn, str(e), at_start=True) from None
-        with sim:
-            for note in scn.sumocfg.notes if scn.sumocfg else ():
-                sim.note(note)
-            stack = assemble(scn, context(scn, sim.step_s, road, walls, obstacles), controller)
-            for hook in hooks:
-                hook.setup(sim)
-            try:
-                steps = rollout(sim, stack, egos, recorder, int(round(spec.sim.duration_s / sim.step_s)),
-                                ([Progress(spec.sim.duration_s)] if progress else []) + list(callbacks))
-            except FieldError as e:  # a goal edge not on the route SUMO gave the ego
-                raise ScenarioError(str(scn.path), e.key, e.expected, e.got, show_got=e.show_got) from None
-            except SumoStepError as e:  # input SUMO rejects only when it gets to it
-                raise load_error(scn, str(e)) from None
-            sim_time = sim.time_s
-            if egos.never_departed():
-                raise named(scn, never_departed_error(scn, egos.never_departed(), sim_time, sim.waiting()))
-        t_end = time.perf_counter()
-        tables = dict(stack.tables())
-        if ssm:  # the file is complete once SUMO has closed
-            tables["ssm_conflicts"] = read_conflicts(ssm_file)
-    return RunResult(scn, Scene(road, walls, obstacles), recorder.table(), recorder.sumo_events(), egos.goals,
-                     steps, sim_time, stack.stats(),
-                     {"setup_s": t_loop - t_start, "loop_s": t_end - t_loop, "total_s": t_end - t_start},
-                     tables, egos.tasks, recorder.signals(), ssm=ssm, persons=recorder.persons(),
-                     classes=recorder.classes())
+    with OpenRun(scn, log_file=log_file) as r:
+        with scenario_errors(scn):
+            steps = rollout(r.sim, r.stack, r.egos, r.recorder, r.n_steps,
+                            ([Progress(scn.spec.sim.duration_s)] if progress else []) + list(callbacks))
+        return r.result(steps)
