@@ -19,11 +19,13 @@ import tempfile
 
 from sumo_avoid.control import CONTROLLERS
 from sumo_avoid.core.config import ScenarioError, ScenarioErrors
+from sumo_avoid.core.registry import Entry
 from sumo_avoid.core.output_error import OutputError, reason, writing
 from sumo_avoid.runs import faults, runner, worker
 from sumo_avoid.runs.job import RunJob, RunOutcome
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.key_reference import format_reference
+from sumo_avoid.scenario.plugins import choose
 from sumo_avoid.studies import batch, files, report, reproduce, suite, tune
 from sumo_avoid.sumo import console
 
@@ -47,7 +49,10 @@ def _parser() -> argparse.ArgumentParser:
     ap = _Parser(prog="sumo-avoid", description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="command", required=True)
     r = sub.add_parser("run", help="run one scenario, write metrics.json, trajectories.csv and plots")
-    r.add_argument("scenario", type=pathlib.Path)
+    r.add_argument("scenario", type=pathlib.Path, help="scenario file (.toml) or SUMO configuration (.sumocfg)")
+    r.add_argument("--ego", dest="egos", action="append", default=[], metavar="ID",
+                   help="a vehicle of the route files for the plug-in to drive (repeatable; sets ego.ids; "
+                        "needed with a .sumocfg)")
     r.add_argument("--seed", type=int, default=None, help="seed for SUMO and the plug-in (default: the scenario's)")
     r.add_argument("--controller", default=None, help="controller name (default: the scenario's)")
     r.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
@@ -55,7 +60,9 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--out", type=pathlib.Path, default=None, help="output folder (default: reports/runs/NAME-...)")
     r.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
-    sub.add_parser("controllers", help="list the controllers")
+    c = sub.add_parser("controllers", help="list the controllers: built in, of installed packages (entry points) "
+                                           "and those named (MODULE:ATTR), each with its origin")
+    c.add_argument("names", nargs="*", metavar="NAME", help="controllers to look up (a name or MODULE:ATTR)")
     sub.add_parser("keys", help="print every scenario key (Markdown table)")
     for mod in (batch, suite, report, reproduce, tune):
         mod.add_parser(sub)
@@ -81,6 +88,8 @@ def cmd_run(args) -> int:
     """Validate, then run the scenario in a child process (the batch's child run, forked from this
     process: runs/worker.py, start "here"): a SUMO crash costs the child, and this one reports it in
     one line (exit code 3)."""
+    if args.egos:  # as an override, so that the run's child process loads the same scenario
+        args.overrides = [*args.overrides, f"ego.ids={json.dumps(args.egos)}"]
     scn = scenario.load(args.scenario, args.overrides, controller=args.controller, seed=args.seed)
     faults.rules()  # test-only fault injection: a malformed SUMO_AVOID_INJECT_CRASH is refused now
     out = args.out
@@ -119,6 +128,21 @@ def cmd_run(args) -> int:
         return EXIT_CRASHED
     print(_summary(res.metrics, out))
     print(f"  {console.summary_line(out / 'sumo.log')}")
+    return 0
+
+
+def cmd_controllers(args) -> int:
+    """One line per controller: name, origin (built-in, entry point (DIST), import path), first doc line."""
+    rows = [(e.name, e.origin, e.doc) for e in CONTROLLERS.entries()]
+    rows += [(name, origin, found.doc if isinstance(found, Entry) else f"(not usable: {found})")
+             for name, origin, found in CONTROLLERS.installed()]
+    for i, name in enumerate(args.names):
+        if name not in {r[0] for r in rows}:
+            e = choose(CONTROLLERS, name, "<command line>", f"controllers[{i}]")
+            rows.append((e.name, e.origin, e.doc))
+    width = max(len(r[0]) for r in rows)
+    for name, origin, doc in rows:
+        print(f"{name:{width}s}  {origin:24s} {doc}")
     return 0
 
 
@@ -176,9 +200,7 @@ def main(argv=None) -> int:
         if getattr(args, "func", None) is not None:  # batch, suite, report, reproduce, tune
             return args.func(args)
         if args.command == "controllers":
-            for entry in CONTROLLERS.entries():
-                print(f"{entry.name:10s} {entry.doc}")
-            return 0
+            return cmd_controllers(args)
         if args.command == "keys":
             print(format_reference())
             return 0

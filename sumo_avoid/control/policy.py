@@ -20,7 +20,6 @@ model: the action is its first return), or a class instantiated with no argument
 """
 from __future__ import annotations
 
-import importlib
 import sys
 from dataclasses import dataclass
 
@@ -30,6 +29,7 @@ from sumo_avoid.actuation.kinematic import KinematicParams
 from sumo_avoid.control.base_controller import BaseController
 from sumo_avoid.control.policy_obs import PolicyObserver
 from sumo_avoid.core.config import FieldError, field_doc
+from sumo_avoid.core.registry import PluginNotFound, import_object, is_import_path
 from sumo_avoid.core.types import EgoTask, Observation
 
 ACTIONS = ("velocity", "accel_yaw")
@@ -53,14 +53,9 @@ class PolicyParams:
     def __post_init__(self):
         if self.action not in ACTIONS:
             raise FieldError("action", f"one of {list(ACTIONS)}", self.action)
-        if self.policy and not _is_import_path(self.policy):
+        if self.policy and not is_import_path(self.policy):
             raise FieldError("policy", "an import path 'module:attribute' (e.g. 'mypkg.policies:keep_lane')",
                              self.policy)
-
-
-def _is_import_path(text: str) -> bool:
-    mod, _, attr = text.partition(":")
-    return bool(mod) and bool(attr) and all(p.isidentifier() for p in mod.split(".") + attr.split("."))
 
 
 def load_policy(path: str):
@@ -68,15 +63,12 @@ def load_policy(path: str):
     ``controllers.policy.policy`` when it is missing or does not import."""
     if not path:
         raise FieldError(POLICY_KEY, "the import path 'module:attribute' of the policy to run", show_got=False)
-    mod, _, attr = path.partition(":")
     if "" not in sys.path:  # the working directory, as `python -m` has it
         sys.path.insert(0, "")
     try:
-        obj = importlib.import_module(mod)
-        for part in attr.split("."):
-            obj = getattr(obj, part)
-    except (ImportError, AttributeError) as e:
-        raise FieldError(POLICY_KEY, f"an importable policy ({type(e).__name__}: {e})", path) from None
+        obj = import_object(path)
+    except PluginNotFound as e:
+        raise FieldError(POLICY_KEY, f"an importable policy ({e})", path) from None
     if isinstance(obj, type):
         obj = obj()
     predict = getattr(obj, "predict", None)

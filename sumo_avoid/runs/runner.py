@@ -53,6 +53,16 @@ def never_departed_error(scn, missing: list[str], time_s: float, waiting) -> Sce
                                              f"t={time_s:.1f} s ({why}){more}", show_got=False)
 
 
+def named(scn, err: ScenarioError) -> ScenarioError:
+    """``err`` naming the SUMO configuration's option (or ``--ego``) when the value came from one."""
+    return scn.sumocfg.rename(err) if scn.sumocfg else err
+
+
+def load_error(scn, message: str, at_start: bool = False) -> ScenarioError:
+    """SUMO's refusal of the scenario's files (:func:`sumo_load_error`), named as :func:`named` does."""
+    return named(scn, sumo_load_error(scn, message, at_start))
+
+
 @contextlib.contextmanager
 def scenario_errors(scn):
     """Input found bad only once SUMO runs, as one :class:`ScenarioError` naming the scenario file
@@ -62,7 +72,7 @@ def scenario_errors(scn):
     except FieldError as e:
         raise ScenarioError(str(scn.path), e.key, e.expected, e.got, show_got=e.show_got) from None
     except SumoStepError as e:
-        raise sumo_load_error(scn, str(e)) from None
+        raise load_error(scn, str(e)) from None
 
 
 class OpenRun:
@@ -101,14 +111,17 @@ class OpenRun:
         args = sumo_args(scn.net_file, scn.route_files, scn.additional_files, spec.sim.step_s, spec.sim.seed,
                          spec.sim.lateral_resolution_m, self.log_file,
                          sumo_collisions=spec.sim.sumo_collisions and spec.arena is None,
-                         ssm=SsmRequest(tuple(spec.ego.ids), self.ssm_file, self.ssm) if self.ssm else None)
+                         ssm=SsmRequest(tuple(spec.ego.ids), self.ssm_file, self.ssm) if self.ssm else None,
+                         begin_s=spec.sim.begin_s, options=scn.sumo_options)
         self.t_loop = time.perf_counter()
         try:
             self.sim = SumoSim(args)
         except SumoStartError as e:
             self._tmp.cleanup()
-            raise sumo_load_error(scn, str(e), at_start=True) from None
+            raise load_error(scn, str(e), at_start=True) from None
         try:
+            for note in scn.sumocfg.notes if scn.sumocfg else ():
+                self.sim.note(note)
             self.stack = assemble(scn, context(scn, self.sim.step_s, scene.road, scene.walls, scene.obstacles),
                                   self.controller)
             for hook in self.hooks:
@@ -131,7 +144,7 @@ class OpenRun:
         sim, egos, recorder = self.sim, self.egos, self.recorder
         sim_time = sim.time_s
         if egos.never_departed():
-            raise never_departed_error(self.scn, egos.never_departed(), sim_time, sim.waiting())
+            raise named(self.scn, never_departed_error(self.scn, egos.never_departed(), sim_time, sim.waiting()))
         sim.close()
         t_end = time.perf_counter()
         tables = dict(self.stack.tables())

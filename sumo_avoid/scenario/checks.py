@@ -162,7 +162,13 @@ def check_ego_ids(spec, files, file: str) -> None:
     for i, vid in enumerate(spec.ego.ids):
         if vid not in ids and vid.rpartition(".")[0] not in flows:
             raise ScenarioError(file, f"ego.ids[{i}]", "the id of a <vehicle> or <trip> in the route files", vid)
-        if departs.get(vid, 0.0) >= spec.sim.duration_s:
+        begin, end = spec.sim.begin_s, spec.sim.begin_s + spec.sim.duration_s
+        if departs.get(vid, begin) >= end:
+            ends = (f"sim.duration_s = {spec.sim.duration_s:g} s" if not begin else
+                    f"t={end:g} s (sim.begin_s {begin:g} s + sim.duration_s {spec.sim.duration_s:g} s)")
             raise ScenarioError(file, f"ego.ids[{i}]", f"egos that depart within the run: '{vid}' departs at "
-                                f"t={departs[vid]:g} s, the run ends at sim.duration_s = {spec.sim.duration_s:g} s",
-                                show_got=False)
+                                f"t={departs[vid]:g} s, the run ends at {ends}", show_got=False)
+        if departs.get(vid, begin) < begin:
+            raise ScenarioError(file, f"ego.ids[{i}]", f"egos that depart within the run: '{vid}' departs at "
+                                f"t={departs[vid]:g} s, before the run begins at sim.begin_s = {begin:g} s (SUMO "
+                                "drops it)", show_got=False)

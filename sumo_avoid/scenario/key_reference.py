@@ -33,6 +33,17 @@ def format_reference() -> str:
              "vehicle SUMO could not insert) is an error as well. Such errors found while running stop the run:",
              "`sumo-avoid run` prints one line naming the file and key and exits with code 2, writing nothing;",
              "in a batch the run is recorded failed with that line.", "",
+             "**SUMO configurations.** `sim.sumocfg = \"city.sumocfg\"` takes the `[sim]` keys this file does not",
+             "set from a SUMO configuration (TOML keys override): `net-file`, `route-files`, `additional-files`",
+             "(comma or space separated; relative paths against the configuration's folder, as SUMO reads them),",
+             "`step-length` (`sim.step_s`), `begin` (`sim.begin_s`), `end` (`sim.duration_s` = end - begin), `seed`,",
+             "`lateral-resolution`; every other option goes to SUMO through `sim.options`, except those the plug-in",
+             "owns (`collision.*`, `time-to-teleport*`, `random`, and the sections output, report, gui_only,",
+             "communication, traci_server, configuration, ssm_device), which are left out with a note in the run's",
+             "`sumo.log`. What neither sets keeps the defaults below (`sim.step_s` 0.1 s, not SUMO's 1 s). Option",
+             "names, values and types are SUMO's own (`sumo --save-template`); a bad configuration is one line",
+             "naming the `.sumocfg` and the option. `sumo-avoid run city.sumocfg --ego ID [--ego ID2]` runs a",
+             "configuration without a scenario file (its name is the file's stem; `--set` as usual).", "",
              "| key | type | default | meaning |", "|---|---|---|---|"]
     for key, tp, default, doc in describe(ScenarioSpec):
         if key in KINDS:

@@ -8,12 +8,18 @@ chosen or not (defaults where the file has none): :func:`build_tables` returns t
 (``Scenario.tables``, ``Context.params``). Keys of the layout before (``[radar]``, ``[safety]``,
 ``[rules]``, ``[actuator]``, ``ego.rules``, ``ego.safety``) give one line naming the new key
 (:func:`check_renamed`).
+
+A name that is not built in may be a plug-in of another package, an entry point or an import path
+``"mypkg.control:MyController"`` (:class:`~sumo_avoid.core.registry.Registry`, docs/plugins.md): its
+``[KIND.NAME]`` table is validated against its ``Params`` the same way (the table name quoted in
+TOML when it holds a dot or colon).
 """
 from __future__ import annotations
 
 from sumo_avoid.actuation import ACTUATORS
 from sumo_avoid.control import CONTROLLERS
 from sumo_avoid.core.config import ScenarioError, build
+from sumo_avoid.core.registry import Entry, PluginNotFound, Registry
 from sumo_avoid.safety import LAYERS
 from sumo_avoid.sensing import SENSORS
 
@@ -56,28 +62,55 @@ def check_renamed(data: dict, file: str) -> None:
             raise RenamedKey(file, f"ego.{key}", new)
 
 
+def choose(registry: Registry, name: str, file: str, key: str) -> Entry:
+    """The plug-in ``name`` of ``registry`` (built in, an entry point or an import path), or one line
+    naming ``key``, what was expected and why it was not found."""
+    try:
+        return registry.find(name)
+    except PluginNotFound as e:
+        raise ScenarioError(file, key, f"one of {registry.names()}, an entry point of group {registry.group} or an "
+                                       f"importable MODULE:ATTR ({e})", name) from None
+
+
 def check_choices(ego, file: str) -> None:
-    """``ego.controller``, ``ego.sensor``, each of ``ego.layers`` and ``ego.actuator`` name registered plug-ins."""
-    choices = [("ego.controller", ego.controller, CONTROLLERS), ("ego.sensor", ego.sensor, SENSORS),
-               *((f"ego.layers[{i}]", name, LAYERS) for i, name in enumerate(ego.layers)),
-               ("ego.actuator", ego.actuator, ACTUATORS)]
-    for key, value, registry in choices:
-        if value not in registry:
-            raise ScenarioError(file, key, f"one of {registry.names()}", value)
+    """``ego.controller``, ``ego.sensor``, each of ``ego.layers`` and ``ego.actuator`` name plug-ins."""
+    for key, value, registry in _chosen(ego):
+        choose(registry, value, file, key)
+
+
+def _chosen(ego) -> list[tuple[str, str, Registry]]:
+    return [("ego.controller", ego.controller, CONTROLLERS), ("ego.sensor", ego.sensor, SENSORS),
+            *((f"ego.layers[{i}]", name, LAYERS) for i, name in enumerate(ego.layers)),
+            ("ego.actuator", ego.actuator, ACTUATORS)]
 
 
 def build_tables(spec, file: str) -> dict:
-    """Every registered plug-in's validated parameters by table name ("controllers.apf", ...), from
-    the scenario's ``[KIND.NAME]`` tables (``spec.controllers``, ``spec.sensors``, ...) or defaults;
-    a table naming no registered plug-in with parameters is an error."""
+    """Every built-in plug-in's validated parameters by table name ("controllers.apf", ...), and those
+    of the chosen plug-ins of other packages, from the scenario's ``[KIND.NAME]`` tables
+    (``spec.controllers``, ``spec.sensors``, ...) or defaults; a table naming no plug-in with
+    parameters is an error."""
     tables = {}
+    chosen = _chosen(spec.ego)
     for kind, registry in KINDS.items():
         given = getattr(spec, kind)
-        for entry in registry.entries():
+        entries = registry.entries() + [registry.find(name) for _, name, reg in chosen
+                                        if reg is registry and name not in registry.names()]
+        why = {}
+        for name in given:
+            try:
+                entry = registry.find(name)
+            except PluginNotFound as e:
+                why[name] = f" ({e})"
+                continue
+            if entry not in entries:
+                entries.append(entry)
+        for entry in entries:
             if entry.params is not None:
                 tables[f"{kind}.{entry.name}"] = build(entry.params, given.get(entry.name, {}), file, f"{kind}.{entry.name}")
+        with_params = {e.name for e in entries if e.params is not None}
         for name in given:
-            if name not in registry or registry[name].params is None:
+            if name not in with_params:
                 named = [e.name for e in registry.entries() if e.params is not None]
-                raise ScenarioError(file, f"{kind}.{name}", f"a {registry.kind} name with parameters, one of {named}", name)
+                raise ScenarioError(file, f"{kind}.{name}", f"a {registry.kind} name with parameters, one of {named}"
+                                                                 f"{why.get(name, '')}", name)
     return tables

@@ -28,12 +28,14 @@ from sumo_avoid.scenario.checks import (
     elements,
     is_convex,
 )
+from sumo_avoid.scenario import sumocfg
 from sumo_avoid.scenario.obstacles import RandomObstaclesConfig, draw
-from sumo_avoid.scenario.plugins import build_tables, check_choices, check_renamed
+from sumo_avoid.scenario.plugins import build_tables, check_choices, check_renamed, choose
 from sumo_avoid.sumo.inputs import FLOCK_MAX_SPEED_MPS, refused_file
 
 MIN_STEP_S, MAX_STEP_S = 0.001, 10.0  # SUMO counts time in ms
 MAX_DURATION_S = 86_400.0  # one simulated day: a longer run is a typo, not a study
+MAX_BEGIN_S = 365 * 86_400.0  # a year of simulated time
 MAX_SEED = 2**31 - 1
 # absurd magnitudes are typos (1e300 overflowed the arena's geometry mid-run): the bounds of an arena
 MAX_ARENA_M = 1e6  # an arena's side, m
@@ -49,20 +51,29 @@ else:  # pragma: no cover
 @dataclass(frozen=True)
 class SimConfig:
     net: str = field_doc(doc="SUMO network file (.net.xml), relative to the scenario file")
+    sumocfg: str = field_doc("", doc="SUMO configuration (.sumocfg), relative to the scenario file: its net, route and "
+                                     "additional files, step length, begin/end, seed and other options fill the [sim] "
+                                     "keys not given here (SUMO configurations, above)")
     routes: tuple[str, ...] = field_doc((), doc="SUMO route files (types, vehicles, flows), relative paths")
     additional: tuple[str, ...] = field_doc((), doc="SUMO additional files (polygons, detectors), relative paths")
     step_s: float = field_doc(0.1, doc="simulation step, s")
     duration_s: float = field_doc(120.0, doc="time limit of the run, s")
+    begin_s: float = field_doc(0.0, doc="simulation time the run starts at (SUMO's --begin), s")
     seed: int = field_doc(1, doc="seed for SUMO and for the plug-in's random numbers")
     lateral_resolution_m: float = field_doc(0.8, doc="SUMO sublane width, m (sublane model on)")
     sumo_collisions: bool = field_doc(True, doc="SUMO's own collision check and output beside the plug-in's "
                                                 "footprint check (always on); off saves SUMO's pairwise per-lane "
                                                 "check (always off in an [arena])")
+    options: dict = field_doc(default_factory=dict, doc="[sim.options] table: more SUMO options by SUMO's names, e.g. "
+                                                        "\"pedestrian.striping.reserve-oncoming\" = 0.34 (not those a "
+                                                        "[sim] key sets or the plug-in owns)")
 
     def __post_init__(self):
         if not MIN_STEP_S <= self.step_s <= MAX_STEP_S or abs(self.step_s * 1000 - round(self.step_s * 1000)) > 1e-6:
             raise FieldError("step_s", f"a step in [{MIN_STEP_S}, {MAX_STEP_S}] s, a whole number of ms (SUMO's time "
                                        "resolution)", self.step_s)
+        if not 0 <= self.begin_s <= MAX_BEGIN_S:
+            raise FieldError("begin_s", f"a time in [0, {MAX_BEGIN_S:g}] s", self.begin_s)
         if not 0 < self.duration_s <= MAX_DURATION_S:
             raise FieldError("duration_s", f"a duration in (0, {MAX_DURATION_S:g}] s", self.duration_s)
         if self.step_s > self.duration_s:
@@ -225,6 +236,8 @@ class Scenario:
     route_files: tuple[pathlib.Path, ...]
     additional_files: tuple[pathlib.Path, ...]
     tables: dict  # "KIND.NAME" -> frozen params dataclass, for every registered plug-in with parameters
+    sumocfg: sumocfg.SumoConfig | None = None  # the SUMO configuration sim.sumocfg names (or the scenario itself)
+    sumo_options: tuple[tuple[str, str], ...] = ()  # sim.options for SUMO's command line (canonical names)
 
     @property
     def name(self) -> str:
@@ -295,25 +308,35 @@ def read_toml(path: pathlib.Path) -> dict:
 
 
 def load(path, overrides: list[str] = (), controller: str | None = None, seed: int | None = None) -> Scenario:
-    """Read, override and validate a scenario file. Raises :class:`ScenarioError`."""
+    """Read, override and validate a scenario file (TOML, or a SUMO configuration ``.sumocfg`` whose
+    egos come from the overrides, ``ego.ids``). Raises :class:`ScenarioError`."""
     path = pathlib.Path(path)
     file = str(path)
-    data = apply_overrides(read_toml(path), list(overrides), file)
+    if sumocfg.is_sumocfg(path):
+        if not path.is_file():
+            raise ScenarioError(file, "<file>", "an existing SUMO configuration file", show_got=False)
+        raw = {"name": path.stem, "sim": {"sumocfg": path.name}}
+    else:
+        raw = read_toml(path)
+    data = apply_overrides(raw, list(overrides), file)
     if controller is not None:
         data.setdefault("ego", {})["controller"] = controller
     if seed is not None:
         data.setdefault("sim", {})["seed"] = seed
+    if sumocfg.is_sumocfg(path) and not (data.get("ego") or {}).get("ids"):
+        raise ScenarioError(file, "--ego", "the id of a vehicle of the configuration's route files for the plug-in "
+                                           "to drive (--ego ID, repeatable)", show_got=False)
+    base = path.resolve().parent
+    data, cfg = sumocfg.merge(data, base, file)
     check_renamed(data, file)
-    spec = build(ScenarioSpec, data, file)
+    spec = sumocfg.checked(cfg, build, ScenarioSpec, data, file)  # a value a SUMO configuration gave: its option
     if spec.random_obstacles is not None:
         spec = _with_random_obstacles(spec, file)
     check_choices(spec.ego, file)
     for i, m in enumerate(spec.output.metrics):
-        if m not in METRICS:
-            raise ScenarioError(file, f"output.metrics[{i}]", f"one of {METRICS.names()}", m)
+        choose(METRICS, m, file, f"output.metrics[{i}]")
     tables = build_tables(spec, file)
-
-    base = path.resolve().parent
+    options = sumocfg.sumo_options(spec.sim.options, base, file)
 
     def existing(rel: str, key: str, what: str) -> pathlib.Path:
         p = (base / rel).resolve()
@@ -324,10 +347,10 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     net = existing(spec.sim.net, "sim.net", "SUMO network")
     routes = tuple(existing(r, f"sim.routes[{i}]", "SUMO route") for i, r in enumerate(spec.sim.routes))
     adds = tuple(existing(r, f"sim.additional[{i}]", "SUMO additional") for i, r in enumerate(spec.sim.additional))
-    check_sumo_inputs(spec, net, routes, adds, file)
-    check_ego_ids(spec, routes + adds, file)
+    sumocfg.checked(cfg, check_sumo_inputs, spec, net, routes, adds, file)
+    sumocfg.checked(cfg, check_ego_ids, spec, routes + adds, file)
     check_goals(spec, net, file)
-    scn = Scenario(spec, path, net, routes, adds, tables)
+    scn = Scenario(spec, path, net, routes, adds, tables, cfg, options)
     check_ego_keys(spec, scn.controller_params, file)
     if spec.arena is not None:
         check_arena(spec, file)

@@ -27,6 +27,7 @@ from sumo_avoid.core.config import ScenarioError, ScenarioErrors, build
 from sumo_avoid.core.output_error import OutputError
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.spec import MAX_SEED, read_toml
+from sumo_avoid.scenario.sumocfg import is_sumocfg
 from sumo_avoid.runs import faults, worker
 from sumo_avoid.runs.job import RunJob, RunOutcome
 from sumo_avoid.studies import ledger as ledger_mod
@@ -111,6 +112,8 @@ def plan(scenario_path, seed: int, overrides=(), controller=None) -> RunSpec:
     h = hashlib.sha256(KEY_VERSION)
     for f in (path, scn.net_file, *scn.route_files, *scn.additional_files):
         h.update(_file_digest(f))
+    if scn.sumocfg is not None and scn.sumocfg.path != path:  # sim.sumocfg: its options are the run's too
+        h.update(_file_digest(scn.sumocfg.path))
     # "inject_crash": None is part of every key, so that keys match those of the ledgers in reports/;
     # test-only crash injection itself lives outside the key (runs/faults.py)
     h.update(json.dumps({"overrides": list(overrides), "controller": scn.spec.ego.controller,
@@ -279,7 +282,7 @@ def add_parser(sub) -> None:
 
 
 def _is_batch_file(path: pathlib.Path) -> bool:
-    return "runs" in read_toml(path)
+    return not is_sumocfg(path) and "runs" in read_toml(path)
 
 
 def config_from_args(args) -> BatchConfig:

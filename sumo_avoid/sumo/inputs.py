@@ -181,12 +181,21 @@ def depart_times(files) -> dict[str, float]:
     return out
 
 
+def sumo_binary() -> pathlib.Path:
+    """SUMO's own ``sumo`` program, of the release libsumo is built from (the eclipse-sumo wheel)."""
+    return pathlib.Path(sumo_package.SUMO_HOME) / "bin" / "sumo"
+
+
+def sumo_env() -> dict:
+    return {**os.environ, "SUMO_HOME": sumo_package.SUMO_HOME}
+
+
 def refused_file(net, additional=(), routes=()) -> pathlib.Path | None:
     """Which file SUMO refused when it would not start and its message names none: the first of the
     additional files, then the route files (SUMO's load order) that SUMO's own ``sumo`` program refuses
     with the net and the files before it; None if none is refused alone or there is no ``sumo`` program.
     Only after a failed start: each try loads the net again."""
-    binary = pathlib.Path(sumo_package.SUMO_HOME) / "bin" / "sumo"
+    binary = sumo_binary()
     files = [("-a", pathlib.Path(f)) for f in additional] + [("-r", pathlib.Path(f)) for f in routes]
     for k, (_, f) in enumerate(files):
         args = [str(binary), "-n", str(net), "--end", "0", "--no-step-log", "true", "--no-warnings", "true"]
@@ -195,7 +204,7 @@ def refused_file(net, additional=(), routes=()) -> pathlib.Path | None:
             args += [flag, ",".join(chosen)] if chosen else []
         try:
             rc = subprocess.run(args, capture_output=True, timeout=300,
-                                env={**os.environ, "SUMO_HOME": sumo_package.SUMO_HOME}).returncode
+                                env=sumo_env()).returncode
         except (OSError, subprocess.SubprocessError):
             return None
         if rc != 0:

@@ -59,19 +59,24 @@ class EgoInfo:
 
 
 def sumo_args(net: pathlib.Path, routes, additional, step_s: float, seed: int, lateral_resolution_m: float,
-              log_file: pathlib.Path | None, sumo_collisions: bool = True, ssm: SsmRequest | None = None) -> list[str]:
+              log_file: pathlib.Path | None, sumo_collisions: bool = True, ssm: SsmRequest | None = None,
+              begin_s: float = 0.0, options=()) -> list[str]:
     """SUMO's command line. ``sumo_collisions=False`` turns SUMO's own (lane-based) collision check
     off: for a flock moved off-lane anywhere in an arena it reports tens of thousands of spurious
     contacts per run (measured); the plug-in's footprint check is the reference there. ``ssm``
     equips the named egos, and only them, with SUMO's SSM device (:mod:`sumo_avoid.sumo.ssm_device`): the
-    route and additional files defining an ego are replaced by equipped copies in its folder."""
+    route and additional files defining an ego are replaced by equipped copies in its folder. ``begin_s``:
+    SUMO's ``--begin``; ``options``: more (name, value) pairs of SUMO's options (``sim.options``, a
+    ``.sumocfg``'s options the plug-in does not own), given before the plug-in's own."""
     if ssm is not None and ssm.ego_ids:
         routes, additional = equip(routes or (), ssm, "r"), equip(additional or (), ssm, "a")
-    args = ["sumo", "-n", str(net), "--step-length", repr(step_s), "--seed", str(seed),
+    args = ["sumo", *(a for name, value in options for a in (f"--{name}", value)), "-n", str(net), "--step-length", repr(step_s), "--seed", str(seed),
             "--collision.action", "warn" if sumo_collisions else "none",
             "--collision.check-junctions", "true" if sumo_collisions else "false",
             "--collision.mingap-factor", "0", "--lateral-resolution", repr(lateral_resolution_m),
             "--time-to-teleport", "-1", "--no-step-log", "true", "--duration-log.disable", "true"]
+    if begin_s:
+        args += ["--begin", repr(begin_s)]
     if routes:
         args += ["-r", ",".join(str(r) for r in routes)]
     if additional:
@@ -223,6 +228,10 @@ class SumoSim:
 
     def departed(self) -> tuple[str, ...]:
         return tuple(libsumo.simulation.getSubscriptionResults()[libsumo.constants.VAR_DEPARTED_VEHICLES_IDS])
+
+    def note(self, text: str) -> None:
+        """A line of the plug-in's in SUMO's message log (the run's sumo.log)."""
+        libsumo.simulation.writeMessage(text)
 
     def waiting(self) -> frozenset[str]:
         """Vehicles whose depart time has come that SUMO could not insert yet."""
