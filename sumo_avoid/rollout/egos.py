@@ -1,5 +1,7 @@
 """Who the plug-in drives: egos are taken over when they depart, retired at their goal or when
-they leave the network on their own; the run is over when every ego is done."""
+they leave the network on their own; the run is over when every ego is done. With a controller
+that leaves the egos to SUMO (``Needs(drives=False)``) they are taken over as egos (recorded,
+scored, retired at their goal) but none is ever driven: the loop senses, controls and moves nobody."""
 from __future__ import annotations
 
 import numpy as np
@@ -12,7 +14,7 @@ from sumo_avoid.core.types import EgoTask
 
 class EgoBook:
     def __init__(self, ego_ids, road, *, goal=None, goals=None, goal_tolerance_m: float, cruise_speed_mps: float,
-                 uses_goals: bool = True, follow_routes: bool = True):
+                 uses_goals: bool = True, follow_routes: bool = True, drives: bool = True):
         self.ids = frozenset(ego_ids)
         self.road = road
         self.goal = goal  # every ego's goal: [x, y], an edge id, or None: the end of each ego's route path
@@ -21,6 +23,7 @@ class EgoBook:
         self.cruise_speed_mps = cruise_speed_mps
         self.uses_goals = uses_goals
         self.follow_routes = follow_routes  # SUMO keeps each ego on its route's lanes (not in an arena)
+        self.drives = drives  # the plug-in moves the egos; False: SUMO's driver does (controller "sumo")
         self.goals: dict[str, tuple[float, float]] = {}  # ego id -> goal (x, y), m (egos with a goal)
         self.active: dict[str, EgoTask] = {}  # driven now, in take-over order
         self.tasks: dict[str, EgoTask] = {}  # every ego taken over (for the metrics)
@@ -31,7 +34,7 @@ class EgoBook:
         return [v for v in departed if v in self.ids]
 
     def take_over(self, sim, vid: str) -> EgoTask:
-        info = sim.take_over(vid)
+        info = sim.take_over(vid, drive=self.drives)
         path, links, limits, lanes = self.road.route(list(info.route_edges), depart_lane=info.lane_index,
                                                      vclass=info.vclass)
         goal = self._goal_point(vid, list(info.route_edges), path, links)
@@ -41,7 +44,7 @@ class EgoBook:
                        info.vclass, _walkways(self.road))
         self.active[vid] = task
         self.tasks[vid] = task
-        if self.follow_routes:
+        if self.follow_routes and self.drives:
             sim.follow_route(task)
         return task
 
@@ -84,7 +87,8 @@ class EgoBook:
         return gone + done
 
     def driven(self, snap: Snapshot) -> tuple[str, ...]:
-        return tuple(v for v in self.active if v in snap.index)
+        """The egos the plug-in moves this step (none when SUMO drives them)."""
+        return tuple(v for v in self.active if v in snap.index) if self.drives else ()
 
     def all_done(self) -> bool:
         return len(self.finished) == len(self.ids) and not self.active

@@ -69,7 +69,8 @@ def run(scn, *, log_file=None, progress: bool = False, callbacks=()) -> RunResul
     hooks = [StaticObstacles(spec.obstacles, obstacles)] + ([ArenaSpawn(arena, walls, obstacles, ctx.rng(1))] if arena else [])
     egos = EgoBook(set(spec.ego.ids) | set(arena.ids if arena else ()), road, goal=spec.ego.goal, goals=spec.ego.goals,
                    goal_tolerance_m=spec.ego.goal_tolerance_m, cruise_speed_mps=spec.ego.cruise_speed_mps,
-                   uses_goals=type(controller).needs.goals, follow_routes=arena is None)
+                   uses_goals=type(controller).needs.goals, follow_routes=arena is None,
+                   drives=type(controller).needs.drives)
     ssm = SsmParams() if arena is None and spec.ego.ids else None  # lanes to measure on: not in an arena
     with tempfile.TemporaryDirectory(prefix="sumo-avoid-run-") as tmp:  # SUMO's SSM file; gone afterwards
         ssm_file = pathlib.Path(tmp) / "ssm.xml"

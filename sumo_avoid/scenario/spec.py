@@ -29,7 +29,7 @@ from sumo_avoid.scenario.checks import (
     is_convex,
 )
 from sumo_avoid.scenario.obstacles import RandomObstaclesConfig, draw
-from sumo_avoid.scenario.plugins import build_tables, check_choices, check_renamed
+from sumo_avoid.scenario.plugins import build_tables, check_choices, check_driven_by_sumo, check_renamed
 from sumo_avoid.sumo.inputs import FLOCK_MAX_SPEED_MPS, refused_file
 
 MIN_STEP_S, MAX_STEP_S = 0.001, 10.0  # SUMO counts time in ms
@@ -308,6 +308,7 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     if spec.random_obstacles is not None:
         spec = _with_random_obstacles(spec, file)
     check_choices(spec.ego, file)
+    check_driven_by_sumo(spec, file)
     for i, m in enumerate(spec.output.metrics):
         if m not in METRICS:
             raise ScenarioError(file, f"output.metrics[{i}]", f"one of {METRICS.names()}", m)

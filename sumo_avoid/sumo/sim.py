@@ -8,7 +8,8 @@ them, :mod:`sumo_avoid.sumo.placement`) and advances the simulation.
 SUMO runs with a fixed seed, ``--collision.check-junctions``, collisions reported but not acted on
 (``--collision.action warn``, ``--collision.mingap-factor 0`` = physical contact only), no
 teleporting, and the sublane model. Egos run with SUMO's safety checks off (speed mode 32,
-lane-change mode 0), so a controller's mistakes are not hidden; other vehicles keep SUMO's models.
+lane-change mode 0), so a controller's mistakes are not hidden; other vehicles keep SUMO's models,
+and so do egos left to SUMO's driver (controller ``sumo``: taken over with ``drive=False``, never moved).
 """
 from __future__ import annotations
 
@@ -233,9 +234,12 @@ class SumoSim:
         return libsumo.simulation.getMinExpectedNumber()
 
     # --- egos ------------------------------------------------------------------------------
-    def take_over(self, vid: str) -> EgoInfo:
-        libsumo.vehicle.setSpeedMode(vid, EGO_SPEED_MODE)
-        libsumo.vehicle.setLaneChangeMode(vid, EGO_LANE_CHANGE_MODE)
+    def take_over(self, vid: str, drive: bool = True) -> EgoInfo:
+        """Make ``vid`` an ego: recorded as one, and (``drive``) with SUMO's safety checks and lane
+        changes off, to be moved by :meth:`apply`; ``drive=False`` leaves it to SUMO's models."""
+        if drive:
+            libsumo.vehicle.setSpeedMode(vid, EGO_SPEED_MODE)
+            libsumo.vehicle.setLaneChangeMode(vid, EGO_LANE_CHANGE_MODE)
         self._egos.add(vid)
         self._static_key = None
         self._routes[vid] = tuple(libsumo.vehicle.getRoute(vid))

@@ -137,6 +137,7 @@ class FakeSim:
 
     def __init__(self, dt=0.5):
         self.dt, self.t, self.state, self.departed_now, self.released = dt, 0.0, {}, (), []
+        self.taken, self.applied = [], 0
         self.state["p"] = (np.array([500.0, 0.0]), 0.0, 0.0)
 
     def departed(self):
@@ -150,7 +151,8 @@ class FakeSim:
             self.departed_now = ("e",)
         return []
 
-    def take_over(self, vid):
+    def take_over(self, vid, drive=True):
+        self.taken.append((vid, drive))
         return type("Info", (), {"route_edges": ("r",), "lane_index": 0, "width_m": 1.8, "length_m": 5.0,
                                  "vclass": "passenger"})()
 
@@ -167,6 +169,7 @@ class FakeSim:
                         [v == "e" for v in ids])
 
     def apply(self, ids, pos, heading, speed):
+        self.applied += 1
         for k, v in enumerate(ids):
             self.state[v] = (np.asarray(pos[k], float), float(heading[k]), float(speed[k]))
 
@@ -198,6 +201,22 @@ def test_loop_takes_over_drives_and_retires_at_the_goal_with_a_fake_simulator():
     t = rec.table()
     assert set(t["id"]) == {"e", "p"}
     assert t.loc[t["id"] == "e", "x"].max() == pytest.approx(95.0)
+
+
+def test_an_ego_left_to_sumo_is_taken_over_without_driving_and_never_sensed_controlled_or_moved():
+    """Needs(drives=False) (controller "sumo"): the ego is an ego (taken over with drive=False, a goal,
+    recorded, retired there) but the loop hands nobody to the sensor, controller, layers or actuator."""
+    sim = FakeSim()
+    ctl = ToyController(ToyParams(speed_mps=10.0))
+    layer = ScaleLayer()
+    stack = Stack(TruthSensor(), ctl, (layer,), KinematicActuator(KinematicParams(), Context(1, sim.dt)))
+    egos = EgoBook({"e"}, StraightRoad(), goal_tolerance_m=5.0, cruise_speed_mps=10.0, drives=False)
+    rec = Recorder()
+    assert rollout(sim, stack, egos, rec, n_steps=20) == 20
+    assert sim.taken == [("e", False)] and sim.applied == 0
+    assert ctl.seen == [] and layer.calls == 0 and egos.goals == {"e": (100.0, 0.0)}
+    t = rec.table()
+    assert t.loc[t["id"] == "e", "is_ego"].all() and (t.loc[t["id"] == "e", "x"] == 0.0).all()
 
 
 def test_loop_stops_at_n_steps_without_egos():
