@@ -104,4 +104,4 @@ def run(scn, *, log_file=None, progress: bool = False, callbacks=()) -> RunResul
                      steps, sim_time, stack.stats(),
                      {"setup_s": t_loop - t_start, "loop_s": t_end - t_loop, "total_s": t_end - t_start},
                      tables, egos.tasks, recorder.signals(), ssm=ssm, persons=recorder.persons(),
-                     classes=recorder.classes())
+                     classes=recorder.classes(), arrivals=egos.arrivals)

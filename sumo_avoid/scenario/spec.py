@@ -77,7 +77,8 @@ class SimConfig:
 class EgoConfig:
     ids: tuple[str, ...] = field_doc((), doc="ids of vehicles in the route files that the plug-in drives "
                                              "(may be empty when an [arena] spawns the egos)")
-    controller: str = field_doc("apf_sa", doc="controller name (see `sumo-avoid controllers`; [controllers.NAME] table)")
+    controller: str = field_doc("apf_sa", doc="controller name (see `sumo-avoid controllers`; [controllers.NAME] table); "
+                                              "'sumo': SUMO's own driver, the baseline (no table; see above)")
     sensor: str = field_doc("truth", doc="what controllers see: 'truth' (ground truth) or 'radar' ([sensors.radar] "
                                          "table, also the parameters of the radar 'truth' carries for a layer "
                                          "that needs scans)")

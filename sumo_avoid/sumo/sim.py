@@ -127,6 +127,7 @@ class SumoSim:
         self._applied: dict[str, float] = {}  # ego -> the signed speed it was last moved at (see read)
         self._routes: dict[str, tuple[str, ...]] = {}  # ego -> its route as SUMO gave it at take-over
         self._placement = RoutePlacement()
+        self._arrived: frozenset[str] = frozenset()  # vehicles SUMO took out at their route's end in the last step
         self._static_key: tuple[str, ...] | None = None  # read(): libsumo's ids the cached static part is for
         self._static: tuple = ()
         self._subscribe_new(libsumo.vehicle.getIDList())
@@ -229,6 +230,11 @@ class SumoSim:
         """Vehicles whose depart time has come that SUMO could not insert yet."""
         return frozenset(libsumo.simulation.getPendingVehicles())
 
+    def arrived(self) -> frozenset[str]:
+        """Vehicles SUMO took out of the network in the last step: at the end of their route (with no
+        teleporting and collisions only reported, SUMO removes a vehicle for nothing else)."""
+        return self._arrived
+
     def pending(self) -> int:
         """Vehicles loaded but not yet in the network, plus those in it."""
         return libsumo.simulation.getMinExpectedNumber()
@@ -294,6 +300,7 @@ class SumoSim:
         except (libsumo.TraCIException, libsumo.FatalTraCIError) as e:
             raise SumoStepError(" ".join(str(e).split())) from None
         arrived = libsumo.simulation.getSubscriptionResults()[libsumo.constants.VAR_ARRIVED_VEHICLES_IDS]
+        self._arrived = frozenset(arrived)
         for vid in arrived:
             self._placement.forget(vid)
             self._dims.pop(vid, None)

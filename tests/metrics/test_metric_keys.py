@@ -21,6 +21,7 @@ RUNS = {  # scenario, overrides, controller: every controller, layer and extra m
     "flocking_arena": ("arena_v4", ["sim.duration_s=2", "arena.n_agents=8"], None),
     "formation": ("formation/gap", ["sim.duration_s=2"], None),
     "ga_planner": ("planner/field", ["sim.duration_s=2"], None),
+    "sumo_driver+radar": ("overtaking", ["sim.duration_s=3", 'ego.sensor="radar"'], "sumo"),  # no layer, no monitor
 }
 
 

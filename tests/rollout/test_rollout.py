@@ -159,6 +159,9 @@ class FakeSim:
     def follow_route(self, task):
         pass
 
+    def arrived(self):
+        return frozenset()
+
     def read(self):
         ids = tuple(self.state)
         pos = np.array([self.state[v][0] for v in ids])
@@ -217,6 +220,39 @@ def test_an_ego_left_to_sumo_is_taken_over_without_driving_and_never_sensed_cont
     assert ctl.seen == [] and layer.calls == 0 and egos.goals == {"e": (100.0, 0.0)}
     t = rec.table()
     assert t.loc[t["id"] == "e", "is_ego"].all() and (t.loc[t["id"] == "e", "x"] == 0.0).all()
+    assert egos.arrivals == {} and not egos.finished
+
+
+class ArrivingSim(FakeSim):
+    """SUMO takes ego 'e' out at the end of its route at t = 3 s (last recorded at 2.5 s)."""
+
+    def __init__(self):
+        super().__init__()
+        self.gone = frozenset()
+
+    def step(self):
+        out = super().step()
+        self.gone = frozenset()
+        if abs(self.t - 3.0) < 1e-9:
+            self.state.pop("e")
+            self.gone = frozenset({"e"})
+        return out
+
+    def arrived(self):
+        return self.gone
+
+
+@pytest.mark.parametrize("drives, goal, arrivals", [(False, None, {"e": 2.5}), (False, "r", {"e": 2.5}),
+                                                    (False, (50.0, 0.0), {}), (True, None, {})])
+def test_an_ego_sumo_drives_to_its_route_end_reaches_a_goal_there(drives, goal, arrivals):
+    """Only an ego SUMO drives, only at its route's end (no goal given, or its last edge): a point goal
+    is reached at the point, and a driven ego at its goal point (the plug-in drives it there)."""
+    sim = ArrivingSim()
+    stack = Stack(TruthSensor(), ToyController(ToyParams(speed_mps=0.0)), (),
+                  KinematicActuator(KinematicParams(), Context(1, sim.dt)))
+    egos = EgoBook({"e"}, StraightRoad(), goal=goal, goal_tolerance_m=5.0, cruise_speed_mps=10.0, drives=drives)
+    rollout(sim, stack, egos, Recorder(), n_steps=20)
+    assert egos.arrivals == arrivals and egos.finished == {"e"}
 
 
 def test_loop_stops_at_n_steps_without_egos():
