@@ -308,6 +308,9 @@ CASES.update({
         SUITE.replace("collisions == 0", "sa_escapes_max <= 2") + 'controller = "apf"\n', "entry[0].criteria[0]"),
     "suite_criterion_second_entry": _suite_file(SUITE + SUITE.replace('"a"', '"b"').replace("collisions == 0", "mu >= 0"),
                                                 "entry[1].criteria[0]"),
+    "suite_criterion_ratio_in_an_arena": _suite_file(  # SUMO's driver, its baseline, cannot drive an arena's flock
+        SUITE.replace("{scn}", str(ARENA)).replace("collisions == 0", "travel_time_ratio_median <= 1.5"),
+        "entry[0].criteria[0]", names=("'travel_time_ratio_median'",)),
     "suite_duplicate_names": _suite_file(SUITE + SUITE, "entry[1].name"),
     "suite_no_seeds": _suite_file(SUITE.replace('seeds = "1"\n', ""), "entry[0].seeds"),
     "suite_seeds_flag": _suite_file(SUITE, "--seeds", argv=("--seeds", "x")),
