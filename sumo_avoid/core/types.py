@@ -119,6 +119,9 @@ class Needs:
 
     goals: bool = True  # egos are retired at their goal (a flock has none)
     v2v: bool = False  # flock members' states over V2V (Observation.v2v)
+    # the plug-in drives the egos (SUMO's safety checks off, the actuator's motion applied each step);
+    # False: SUMO's own driver models drive them and the plug-in only records them (controller "sumo")
+    drives: bool = True
 
 
 @dataclass(frozen=True)

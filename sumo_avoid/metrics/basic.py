@@ -245,13 +245,16 @@ def fitness(v_vel, v_flock, phi_coll, n_disc, n_min, phi_wall, phi_corr, n_agent
 # ---------------------------------------------------------------------------------------------
 # motion summary
 # ---------------------------------------------------------------------------------------------
-def motion_summary(traj: pd.DataFrame, goals: dict, goal_tol_m: float, egos: EgoRows | None = None) -> dict:
+def motion_summary(traj: pd.DataFrame, goals: dict, goal_tol_m: float, egos: EgoRows | None = None,
+                   arrivals: dict | None = None) -> dict:
     """Per-ego and aggregate motion figures.
 
     Per ego present in ``traj`` (rows with is_ego): ``goal_reached`` (its centre came within
     goal_tol_m, m, of ``goals[id]`` = (x, y) m), ``time_to_goal_s`` (first such time_s minus the
     ego's first time_s; None if never), ``path_length_m`` (sum of centre displacements between
-    its consecutive rows, m), ``mean_speed_mps`` (mean of its ``speed`` column).
+    its consecutive rows, m), ``mean_speed_mps`` (mean of its ``speed`` column). An ego in ``arrivals``
+    (id -> time_s: SUMO's driver took it to its route's end, its goal, and SUMO took it out there) reached
+    its goal then if its centre never came within goal_tol_m (it arrived on another lane than the goal's).
     Egos without an entry in ``goals`` get goal_reached = time_to_goal_s = None and are left out
     of the goal aggregates; goal entries for ids absent from ``traj`` are ignored.
 
@@ -282,6 +285,9 @@ def motion_summary(traj: pd.DataFrame, goals: dict, goal_tol_m: float, egos: Ego
     agg = pd.DataFrame({"t0": g["t"].min(), "path": g["seg"].sum(), "v": g["speed"].mean(),
                         "t_hit": g["t_hit"].min()})
     agg.index = np.asarray(uid)[agg.index.to_numpy()]
+    for vid, t_arrived in (arrivals or {}).items():
+        if vid in agg.index and not np.isfinite(agg.at[vid, "t_hit"]):
+            agg.at[vid, "t_hit"] = t_arrived
     for vid, row in agg.iterrows():  # one iteration per ego (reporting only)
         has_goal = vid in goals
         reached = bool(np.isfinite(row["t_hit"])) if has_goal else None

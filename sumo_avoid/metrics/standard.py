@@ -255,4 +255,5 @@ class Motion(Metric):
     keys = Keys(("goal_reached", "time_to_goal_s", "path_length_m", "mean_speed_mps"), nested=("per_ego",))
 
     def compute(self, run: RunResult) -> dict:
-        return basic.motion_summary(run.traj, run.goals, run.scenario.spec.ego.goal_tolerance_m, ego_rows(run))
+        return basic.motion_summary(run.traj, run.goals, run.scenario.spec.ego.goal_tolerance_m, ego_rows(run),
+                                    arrivals=run.arrivals)

@@ -8,7 +8,8 @@ Choices made here (data, so the loop never asks):
 * the layers are ``ego.layers`` in that order (:data:`sumo_avoid.safety.LAYERS`, default
   ``["traffic"]``); when the sensor declares ``provides_scans``, every layer that declares
   ``monitor_when_scans`` and was not chosen runs after them as a monitor (``enforce=False``: its
-  counters in metrics.json, the command untouched) — the danger-time layer with the radar;
+  counters in metrics.json, the command untouched) — the danger-time layer with the radar; none
+  when the controller leaves the egos to SUMO (``Needs(drives=False)``, controller ``sumo``);
 * the sensor is ``ego.sensor`` (:data:`sumo_avoid.sensing.SENSORS`); it carries a front radar
   (stream ``[seed, 4]``, a rear one on ``[seed, 5]``) when it is the radar or a layer needs scans,
   and the V2V link (stream ``default_rng(seed)``) when the controller declares ``Needs(v2v=True)``;
@@ -73,8 +74,11 @@ def controller_for(scn, ctx: Context) -> Controller:
 
 
 def layer_plan(scn) -> tuple[tuple[Entry, object, dict], ...]:
-    """The layers of a run, in order: (registry entry, its parameters, keyword arguments)."""
+    """The layers of a run, in order: (registry entry, its parameters, keyword arguments); none
+    when the controller leaves the egos to SUMO (``Needs(drives=False)``: there is no command to limit)."""
     ego = scn.spec.ego
+    if not CONTROLLERS[ego.controller].factory.needs.drives:
+        return ()
     plan = [(LAYERS[name], scn.tables.get(f"layers.{name}"), {}) for name in ego.layers]
     if SENSORS[ego.sensor].factory.provides_scans:
         plan += [(e, scn.tables.get(f"layers.{e.name}"), {"enforce": False}) for e in LAYERS.entries()

@@ -1,5 +1,7 @@
 """Who the plug-in drives: egos are taken over when they depart, retired at their goal or when
-they leave the network on their own; the run is over when every ego is done."""
+they leave the network on their own; the run is over when every ego is done. With a controller
+that leaves the egos to SUMO (``Needs(drives=False)``) they are taken over as egos (recorded,
+scored, retired at their goal) but none is ever driven: the loop senses, controls and moves nobody."""
 from __future__ import annotations
 
 import numpy as np
@@ -12,7 +14,7 @@ from sumo_avoid.core.types import EgoTask
 
 class EgoBook:
     def __init__(self, ego_ids, road, *, goal=None, goals=None, goal_tolerance_m: float, cruise_speed_mps: float,
-                 uses_goals: bool = True, follow_routes: bool = True):
+                 uses_goals: bool = True, follow_routes: bool = True, drives: bool = True):
         self.ids = frozenset(ego_ids)
         self.road = road
         self.goal = goal  # every ego's goal: [x, y], an edge id, or None: the end of each ego's route path
@@ -21,27 +23,35 @@ class EgoBook:
         self.cruise_speed_mps = cruise_speed_mps
         self.uses_goals = uses_goals
         self.follow_routes = follow_routes  # SUMO keeps each ego on its route's lanes (not in an arena)
+        self.drives = drives  # the plug-in moves the egos; False: SUMO's driver does (controller "sumo")
         self.goals: dict[str, tuple[float, float]] = {}  # ego id -> goal (x, y), m (egos with a goal)
         self.active: dict[str, EgoTask] = {}  # driven now, in take-over order
         self.tasks: dict[str, EgoTask] = {}  # every ego taken over (for the metrics)
         self.finished: set[str] = set()
+        # egos SUMO drives: those whose goal is their route's end, when each was last seen, and those SUMO
+        # took out there (ego id -> time of its last recorded step, s): they reached it (metrics.basic)
+        self._route_end: set[str] = set()
+        self._seen: dict[str, float] = {}
+        self.arrivals: dict[str, float] = {}
 
     def new(self, departed) -> list[str]:
         """The egos among the vehicles SUMO just inserted."""
         return [v for v in departed if v in self.ids]
 
     def take_over(self, sim, vid: str) -> EgoTask:
-        info = sim.take_over(vid)
+        info = sim.take_over(vid, drive=self.drives)
         path, links, limits, lanes = self.road.route(list(info.route_edges), depart_lane=info.lane_index,
                                                      vclass=info.vclass)
         goal = self._goal_point(vid, list(info.route_edges), path, links)
+        if not self.drives and self._goal_is_route_end(vid, list(info.route_edges)):
+            self._route_end.add(vid)
         if self.uses_goals:
             self.goals[vid] = (float(goal[0]), float(goal[1]))
         task = EgoTask(vid, goal, path, self.cruise_speed_mps, links, limits, lanes, info.width_m, info.length_m,
                        info.vclass, _walkways(self.road))
         self.active[vid] = task
         self.tasks[vid] = task
-        if self.follow_routes:
+        if self.follow_routes and self.drives:
             sim.follow_route(task)
         return task
 
@@ -63,15 +73,26 @@ class EgoBook:
             return np.asarray(path[-1], float)
         return np.asarray(polyline_point_at(path, links[k].s_stop_m), float)
 
+    def _goal_is_route_end(self, vid: str, edges: list[str]) -> bool:
+        """The ego's goal is the end of its route: no goal given, or its route's last edge."""
+        goal = self.goal_of.get(vid, self.goal)
+        return goal is None or (isinstance(goal, str) and bool(edges) and goal == edges[-1])
+
     def never_departed(self) -> list[str]:
         """Egos SUMO never inserted (not taken over), sorted."""
         return sorted(self.ids - set(self.tasks))
 
     def retire(self, sim, snap: Snapshot) -> list[str]:
         """Egos gone from the network on their own, then those whose centre is within the goal
-        tolerance (taken out of SUMO); both are done."""
+        tolerance (taken out of SUMO); both are done. An ego SUMO drives whose goal is its route's end
+        reaches it also when SUMO takes it out there (``arrivals``): SUMO's driver is told no lane to
+        end on, only the route, and arrives on whichever lane it drove (the goal point lies on one)."""
         gone = [v for v in self.active if v not in snap.index]
         present = [v for v in self.active if v in snap.index]
+        if not self.drives:
+            arrived = sim.arrived()
+            self.arrivals.update((v, self._seen[v]) for v in gone if v in self._route_end and v in arrived)
+            self._seen.update((v, snap.time_s) for v in present)
         done = []
         if self.uses_goals and present:  # one array operation for all egos
             gap = snap.pos[[snap.index[v] for v in present]] - np.array([self.goals[v] for v in present])
@@ -84,7 +105,8 @@ class EgoBook:
         return gone + done
 
     def driven(self, snap: Snapshot) -> tuple[str, ...]:
-        return tuple(v for v in self.active if v in snap.index)
+        """The egos the plug-in moves this step (none when SUMO drives them)."""
+        return tuple(v for v in self.active if v in snap.index) if self.drives else ()
 
     def all_done(self) -> bool:
         return len(self.finished) == len(self.ids) and not self.active

@@ -34,6 +34,9 @@ class RunResult:
     ssm: Any = None  # sumo_avoid.sumo.ssm_device.SsmParams SUMO's SSM device ran with (conflicts in tables), None: off
     persons: pd.DataFrame | None = None  # one row per recorded person per step, columns as traj (rollout.recorder)
     classes: dict = field(default_factory=dict)  # id -> SUMO vehicle class of every recorded road user
+    # ego id -> time of its last recorded step, s: egos SUMO's driver drove to their route's end, their goal
+    # (controller "sumo"; rollout.egos.EgoBook.arrivals): they reached it (metrics.basic.motion_summary)
+    arrivals: dict = field(default_factory=dict)
     _memo: dict = field(default_factory=dict, compare=False, repr=False)
 
     @property

@@ -98,7 +98,8 @@ class OpenRun:
         self.hooks = [StaticObstacles(spec.obstacles, obstacles)] + ([ArenaSpawn(arena, walls, obstacles, ctx.rng(1))] if arena else [])
         self.egos = EgoBook(set(spec.ego.ids) | set(arena.ids if arena else ()), road, goal=spec.ego.goal, goals=spec.ego.goals,
                             goal_tolerance_m=spec.ego.goal_tolerance_m, cruise_speed_mps=spec.ego.cruise_speed_mps,
-                            uses_goals=type(self.controller).needs.goals, follow_routes=arena is None)
+                            uses_goals=type(self.controller).needs.goals, follow_routes=arena is None,
+                            drives=type(self.controller).needs.drives)
         self.ssm = SsmParams() if arena is None and spec.ego.ids else None  # lanes to measure on: not in an arena
         self.log_file = log_file
         self._tmp = None
@@ -154,7 +155,7 @@ class OpenRun:
                          steps, sim_time, self.stack.stats(),
                          {"setup_s": self.t_loop - self.t_start, "loop_s": t_end - self.t_loop, "total_s": t_end - self.t_start},
                          tables, egos.tasks, recorder.signals(), ssm=self.ssm, persons=recorder.persons(),
-                         classes=recorder.classes())
+                         classes=recorder.classes(), arrivals=self.egos.arrivals)
 
 
 def run(scn, *, log_file=None, progress: bool = False, callbacks=()) -> RunResult:

@@ -44,6 +44,16 @@ def format_reference() -> str:
              "names, values and types are SUMO's own (`sumo --save-template`); a bad configuration is one line",
              "naming the `.sumocfg` and the option. `sumo-avoid run city.sumocfg --ego ID [--ego ID2]` runs a",
              "configuration without a scenario file (its name is the file's stem; `--set` as usual).", "",
+             "**SUMO's own driver.** `ego.controller = \"sumo\"` (or `--controller sumo`, `--set 'ego.controller=\"sumo\"'`)",
+             "leaves the egos to SUMO: each stays an ordinary SUMO vehicle driven by its vType's models (car-following,",
+             "lane-changing, junction model and their parameters in the route file, e.g. Krauss with its `sigma`), with",
+             "SUMO's right of way, signals and safety checks; the plug-in never moves it. It is still an ego: recorded,",
+             "retired at its goal and scored with every metric a driven ego gets (collisions, SUMO's included, rule",
+             "violations, road use, comfort, time to goal), so a study gets a row for SUMO's driver and",
+             "`travel_time_ratio` its baseline (docs/batch.md). Keys for the plug-in's drivers are ignored with it",
+             "(`ego.sensor`, `ego.layers`, `ego.actuator`, `ego.cruise_speed_mps`, their tables); it has no",
+             "`[controllers.sumo]` keys; an `[arena]` with it is refused (SUMO drives only on a route's lanes).",
+             "SUMO's collision handling is the scenario's (`sim.sumo_collisions`: contact reported, not acted on).", "",
              "| key | type | default | meaning |", "|---|---|---|---|"]
     for key, tp, default, doc in describe(ScenarioSpec):
         if key in KINDS:

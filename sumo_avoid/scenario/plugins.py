@@ -84,6 +84,16 @@ def _chosen(ego) -> list[tuple[str, str, Registry]]:
             ("ego.actuator", ego.actuator, ACTUATORS)]
 
 
+def check_driven_by_sumo(spec, file: str) -> None:
+    """A controller that leaves the egos to SUMO's driver (``Needs(drives=False)``, ``sumo``) needs
+    egos on a route: an [arena]'s flock is spawned off the lanes, where SUMO's models cannot drive it."""
+    name = spec.ego.controller
+    if spec.arena is not None and not CONTROLLERS[name].factory.needs.drives:
+        plugins = [n for n in CONTROLLERS.names() if CONTROLLERS[n].factory.needs.drives]
+        raise ScenarioError(file, "ego.controller", f"a controller that drives the egos in an [arena] (one of {plugins}: "
+                            f"'{name}' leaves them to SUMO's driver, which drives only on a route's lanes)", name)
+
+
 def build_tables(spec, file: str) -> dict:
     """Every built-in plug-in's validated parameters by table name ("controllers.apf", ...), and those
     of the chosen plug-ins of other packages, from the scenario's ``[KIND.NAME]`` tables

@@ -30,7 +30,7 @@ from sumo_avoid.scenario.checks import (
 )
 from sumo_avoid.scenario import sumocfg
 from sumo_avoid.scenario.obstacles import RandomObstaclesConfig, draw
-from sumo_avoid.scenario.plugins import build_tables, check_choices, check_renamed, choose
+from sumo_avoid.scenario.plugins import build_tables, check_choices, check_driven_by_sumo, check_renamed, choose
 from sumo_avoid.sumo.inputs import FLOCK_MAX_SPEED_MPS, refused_file
 
 MIN_STEP_S, MAX_STEP_S = 0.001, 10.0  # SUMO counts time in ms
@@ -88,7 +88,8 @@ class SimConfig:
 class EgoConfig:
     ids: tuple[str, ...] = field_doc((), doc="ids of vehicles in the route files that the plug-in drives "
                                              "(may be empty when an [arena] spawns the egos)")
-    controller: str = field_doc("apf_sa", doc="controller name (see `sumo-avoid controllers`; [controllers.NAME] table)")
+    controller: str = field_doc("apf_sa", doc="controller name (see `sumo-avoid controllers`; [controllers.NAME] table); "
+                                              "'sumo': SUMO's own driver, the baseline (no table; see above)")
     sensor: str = field_doc("truth", doc="what controllers see: 'truth' (ground truth) or 'radar' ([sensors.radar] "
                                          "table, also the parameters of the radar 'truth' carries for a layer "
                                          "that needs scans)")
@@ -333,6 +334,7 @@ def load(path, overrides: list[str] = (), controller: str | None = None, seed: i
     if spec.random_obstacles is not None:
         spec = _with_random_obstacles(spec, file)
     check_choices(spec.ego, file)
+    check_driven_by_sumo(spec, file)
     for i, m in enumerate(spec.output.metrics):
         choose(METRICS, m, file, f"output.metrics[{i}]")
     tables = build_tables(spec, file)

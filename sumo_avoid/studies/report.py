@@ -31,7 +31,7 @@ from sumo_avoid.plots.trajectories import (
     plot_timeseries,
     plot_trajectories,
 )
-from sumo_avoid.studies import ledger
+from sumo_avoid.studies import baseline, ledger
 from sumo_avoid.studies.files import CL, check_out_file, make_dirs, remove_dirs, write_atomic
 from sumo_avoid.road.network import Road
 
@@ -40,17 +40,18 @@ METRICS = ("collisions", "min_gap_m", "phi_coll", "phi_wall", "mean_speed_mps", 
            "wrong_way_m", "off_road_m", "max_abs_jerk_mps3", "max_lat_accel_mps2")
 
 NEEDS = ("key", "scenario", "controller", "seed", "status", "error")  # the ledger columns a report reads
+DERIVED = (baseline.COLUMN,)  # columns computed across the runs (studies/baseline.py), shown beside METRICS
 
 
 def load_runs(src) -> tuple:
-    """(runs DataFrame, base folder for the ``artifacts`` column). Raises ScenarioError naming the
-    file for input that is no ledger and no run folder."""
+    """(runs DataFrame with ``travel_time_ratio``, base folder for the ``artifacts`` column). Raises
+    ScenarioError naming the file for input that is no ledger and no run folder."""
     src = pathlib.Path(src)
     if src.is_dir() and (src / "ledger.sqlite").is_file():
         src = src / "ledger.sqlite"
     if src.is_file():
         ledger.check(src, "LEDGER_OR_RUN_DIR", new_ok=False, needs=NEEDS)
-        return ledger.read(src), src.resolve().parent
+        return baseline.with_travel_time_ratio(ledger.read(src)), src.resolve().parent
     if not src.is_dir():
         raise ScenarioError(str(src), "<file>", "a ledger file or a folder of runs (no such file)", show_got=False)
     dirs = [src] if (src / "metrics.json").is_file() else sorted(p.parent for p in src.glob("*/metrics.json"))
@@ -64,7 +65,7 @@ def load_runs(src) -> tuple:
         row.update(ledger.scalar_metrics(m))
         row.update(scenario=m.get("scenario"), controller=m.get("controller"), seed=m.get("seed"))
         rows.append(row)
-    return pd.DataFrame(rows), src.resolve()
+    return baseline.with_travel_time_ratio(pd.DataFrame(rows)), src.resolve()
 
 
 def _metrics(path: pathlib.Path) -> dict:
@@ -131,7 +132,8 @@ def summary(df):
                      "min_gap_m_min": agg("min_gap_m", "min"), "phi_wall_max": agg("phi_wall", "max"),
                      "phi_coll_mean": agg("phi_coll", "mean"), "mean_speed_mps_mean": agg("mean_speed_mps", "mean"),
                      "min_ttc_s_min": agg("min_ttc_s", "min"), "min_ttc2d_s_min": agg("min_ttc2d_s", "min"),
-                     "wrong_way_m_max": agg("wrong_way_m", "max"), "off_road_m_max": agg("off_road_m", "max")})
+                     "wrong_way_m_max": agg("wrong_way_m", "max"), "off_road_m_max": agg("off_road_m", "max"),
+                     "travel_time_ratio_median": agg(baseline.COLUMN, "median")})
     return pd.DataFrame(rows)
 
 
@@ -153,7 +155,7 @@ def box_plots(df) -> str | None:
     """One panel per metric: a box per scenario/controller over its done runs' seeds."""
     df, group = varied(df)
     d = df[df["status"] == "done"]
-    cols = [c for c in METRICS if c in d and d[c].notna().any()]
+    cols = [c for c in (*METRICS, *DERIVED) if c in d and d[c].notna().any()]
     if not cols or d.empty:
         return None
     groups = list(d.groupby(group, sort=True))
@@ -281,7 +283,7 @@ def build_html(df, base: pathlib.Path, title: str, run_key: str | None = None) -
         parts.append(f"<h2>Gap and speed over time: {html.escape(str(row['scenario']))} · "
                      f"{html.escape(str(row['controller']))} · seed {row['seed']} ({html.escape(str(row['key'])[:16])})</h2>"
                      + (_img(b64, "time series") if b64 else "<p>(no trajectory recorded)</p>"))
-    cols = ["key", *group, "seed", "status"] + [c for c in ("goal_reached", *METRICS) if c in df]
+    cols = ["key", *group, "seed", "status"] + [c for c in ("goal_reached", *METRICS, *DERIVED) if c in df]
     shown = df.sort_values(["scenario", "controller", "seed", "key"]).assign(key=lambda x: x["key"].astype(str).str[:16])
     parts.append(f'<h2>Runs</h2><div id="runs">{_table_html(shown, cols)}</div>')
     parts.append("<h2>Failed runs</h2>" + (f'<div id="failed" class="failed">'

@@ -6,13 +6,19 @@ A suite file has ``[[entry]]`` tables: ``name``, ``scenario`` (path relative to 
 
     METRIC OP VALUE          # must hold on every seed, e.g.  collisions == 0,  phi_wall <= 0.1
     METRIC_rate OP VALUE     # share of seeds where the (true/false) metric is true: goal_reached_rate >= 0.9
-    METRIC_mean|_min|_max OP VALUE   # aggregate over seeds: min_gap_m_min >= 0.5
+    METRIC_mean|_median|_min|_max OP VALUE   # aggregate over seeds: min_gap_m_min >= 0.5
 
 OP is one of ``== != <= >= < >``; VALUE a number or ``true``/``false``. METRIC must be a key with
 one value per run that a run of the entry writes (:func:`sumo_avoid.runs.declared.metric_keys`,
 from the metrics' and plug-ins' declarations), checked before any run starts; a metric without a
 value (n/a) and a failed run fail the entry. ``[defaults]`` may give ``seeds`` and ``set`` for
 every entry.
+
+``travel_time_ratio`` (:mod:`sumo_avoid.studies.baseline`: time to goal against SUMO's own driver on
+the same scenario and seed) may be named like a metric, e.g. ``travel_time_ratio_median <= 1.5``; the
+suite then runs the entry's baseline too (controller ``sumo``, same scenario, seeds and overrides)
+unless it is a run of the suite already. A seed without a ratio (either did not reach its goal)
+fails a per-seed criterion and makes an aggregate n/a.
 """
 from __future__ import annotations
 
@@ -22,6 +28,7 @@ import math
 import operator
 import pathlib
 import re
+import statistics
 import tempfile
 import xml.etree.ElementTree as ET
 
@@ -30,12 +37,12 @@ from sumo_avoid.core.types import Keys
 from sumo_avoid.runs.declared import metric_keys
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.spec import read_toml
-from sumo_avoid.studies import batch, ledger
+from sumo_avoid.studies import baseline, batch, ledger
 from sumo_avoid.studies.batch import parse_seeds
 from sumo_avoid.studies.files import SuiteFile, check_out_file, make_dirs, remove_dirs, write_atomic
 
 OPS = {"==": operator.eq, "!=": operator.ne, "<=": operator.le, ">=": operator.ge, "<": operator.lt, ">": operator.gt}
-AGGREGATES = ("rate", "mean", "min", "max")
+AGGREGATES = ("rate", "mean", "median", "min", "max")
 _CRIT = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\s*(==|!=|<=|>=|<|>)\s*"
                    r"(true|false|[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*$")
 
@@ -100,6 +107,8 @@ class Criterion:
             x = sum(1.0 for v in vals if v) / len(vals)
         elif agg == "mean":
             x = sum(vals) / len(vals)
+        elif agg == "median":
+            x = statistics.median(vals)
         else:
             x = (min if agg == "min" else max)(vals)
         return bool(op(x, self.value)), f"{name} {agg} = {x:.4g} over {len(vals)} seeds"
@@ -151,7 +160,10 @@ def check_criteria(entries: list[Entry], file: str) -> None:
     ScenarioError (ScenarioErrors: one line per bad criterion)."""
     errors = []
     for i, e in enumerate(entries):
-        keys = metric_keys(scenario.load(e.scenario, list(e.overrides), controller=e.controller, seed=e.seeds[0]))
+        scn = scenario.load(e.scenario, list(e.overrides), controller=e.controller, seed=e.seeds[0])
+        keys = metric_keys(scn)
+        if scn.spec.arena is None:  # the ratio's baseline, SUMO's driver, drives only on a route's lanes
+            keys = keys | baseline.KEYS
         for j, c in enumerate(e.criteria):
             problem = c.problem(keys)
             if problem:
@@ -171,7 +183,8 @@ class EntryResult:
 
 
 def evaluate(entries: list[Entry], runs_by_entry: dict[str, list], df) -> list[EntryResult]:
-    """Check every entry's criteria on its runs' ledger rows."""
+    """Check every entry's criteria on its runs' ledger rows (with ``travel_time_ratio``)."""
+    df = baseline.with_travel_time_ratio(df)
     out = []
     for e in entries:
         keys = [s.key for s in runs_by_entry[e.name]]
@@ -255,9 +268,17 @@ def cmd_suite(args) -> int:
                 seen.add(s.key)
                 all_runs.append(s)
     check_criteria(entries, str(args.suite))
+    n_entry_runs = len(all_runs)
+    for e in entries:
+        if not any(c.resolve(baseline.KEYS.numeric) for c in e.criteria):
+            continue
+        for s in batch.expand([e.scenario], e.seeds, e.overrides, [baseline.BASELINE]):  # its ratio's baseline
+            if s.key not in seen:
+                seen.add(s.key)
+                all_runs.append(s)
     made = make_dirs(args.junit.parent, "--junit") if args.junit else []  # a folder that vanishes later: not made again
     try:
-        results = _run(args, entries, runs_by_entry, all_runs, workers)
+        results = _run(args, entries, runs_by_entry, all_runs, workers, len(all_runs) - n_entry_runs)
         print(table(results))
         if args.junit:
             write_atomic(args.junit, junit_xml(results, args.suite.stem))
@@ -269,11 +290,12 @@ def cmd_suite(args) -> int:
     return 0 if all(r.passed for r in results) else 1
 
 
-def _run(args, entries, runs_by_entry, all_runs, workers) -> list[EntryResult]:
+def _run(args, entries, runs_by_entry, all_runs, workers, n_baselines: int = 0) -> list[EntryResult]:
     with tempfile.TemporaryDirectory(prefix="sumo-avoid-suite-") as tmp:
         led = args.ledger or pathlib.Path(tmp) / "ledger.sqlite"
         cfg = batch.BatchConfig(tuple(all_runs), led, workers=workers,
                                 timeout_s=args.timeout, scheduler=args.scheduler)
-        print(f"suite {args.suite}: {len(entries)} entries, {len(all_runs)} runs", flush=True)
+        extra = f" ({n_baselines} of them baselines for travel_time_ratio, controller {baseline.BASELINE})" if n_baselines else ""
+        print(f"suite {args.suite}: {len(entries)} entries, {len(all_runs)} runs{extra}", flush=True)
         batch.run_batch(cfg, progress=False if args.quiet else None)
         return evaluate(entries, runs_by_entry, ledger.read(led))

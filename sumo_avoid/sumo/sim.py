@@ -8,7 +8,8 @@ them, :mod:`sumo_avoid.sumo.placement`) and advances the simulation.
 SUMO runs with a fixed seed, ``--collision.check-junctions``, collisions reported but not acted on
 (``--collision.action warn``, ``--collision.mingap-factor 0`` = physical contact only), no
 teleporting, and the sublane model. Egos run with SUMO's safety checks off (speed mode 32,
-lane-change mode 0), so a controller's mistakes are not hidden; other vehicles keep SUMO's models.
+lane-change mode 0), so a controller's mistakes are not hidden; other vehicles keep SUMO's models,
+and so do egos left to SUMO's driver (controller ``sumo``: taken over with ``drive=False``, never moved).
 """
 from __future__ import annotations
 
@@ -131,6 +132,7 @@ class SumoSim:
         self._applied: dict[str, float] = {}  # ego -> the signed speed it was last moved at (see read)
         self._routes: dict[str, tuple[str, ...]] = {}  # ego -> its route as SUMO gave it at take-over
         self._placement = RoutePlacement()
+        self._arrived: frozenset[str] = frozenset()  # vehicles SUMO took out at their route's end in the last step
         self._static_key: tuple[str, ...] | None = None  # read(): libsumo's ids the cached static part is for
         self._static: tuple = ()
         self._subscribe_new(libsumo.vehicle.getIDList())
@@ -237,14 +239,22 @@ class SumoSim:
         """Vehicles whose depart time has come that SUMO could not insert yet."""
         return frozenset(libsumo.simulation.getPendingVehicles())
 
+    def arrived(self) -> frozenset[str]:
+        """Vehicles SUMO took out of the network in the last step: at the end of their route (with no
+        teleporting and collisions only reported, SUMO removes a vehicle for nothing else)."""
+        return self._arrived
+
     def pending(self) -> int:
         """Vehicles loaded but not yet in the network, plus those in it."""
         return libsumo.simulation.getMinExpectedNumber()
 
     # --- egos ------------------------------------------------------------------------------
-    def take_over(self, vid: str) -> EgoInfo:
-        libsumo.vehicle.setSpeedMode(vid, EGO_SPEED_MODE)
-        libsumo.vehicle.setLaneChangeMode(vid, EGO_LANE_CHANGE_MODE)
+    def take_over(self, vid: str, drive: bool = True) -> EgoInfo:
+        """Make ``vid`` an ego: recorded as one, and (``drive``) with SUMO's safety checks and lane
+        changes off, to be moved by :meth:`apply`; ``drive=False`` leaves it to SUMO's models."""
+        if drive:
+            libsumo.vehicle.setSpeedMode(vid, EGO_SPEED_MODE)
+            libsumo.vehicle.setLaneChangeMode(vid, EGO_LANE_CHANGE_MODE)
         self._egos.add(vid)
         self._static_key = None
         self._routes[vid] = tuple(libsumo.vehicle.getRoute(vid))
@@ -299,6 +309,7 @@ class SumoSim:
         except (libsumo.TraCIException, libsumo.FatalTraCIError) as e:
             raise SumoStepError(" ".join(str(e).split())) from None
         arrived = libsumo.simulation.getSubscriptionResults()[libsumo.constants.VAR_ARRIVED_VEHICLES_IDS]
+        self._arrived = frozenset(arrived)
         for vid in arrived:
             self._placement.forget(vid)
             self._dims.pop(vid, None)

@@ -80,6 +80,8 @@ CASES: dict[str, Case] = {
     "val_ids_duplicate": scenario(base(ids='["ego", "ego"]'), "ego.ids[1]"),
     "val_ego_not_in_routes": scenario(base(ids='["nobody"]'), "ego.ids[0]"),
     "val_controller": scenario(base(ego='controller = "magic"'), "ego.controller"),
+    # SUMO's driver drives only on a route's lanes: an [arena]'s flock is off them
+    "val_controller_sumo_in_arena": scenario(base("[arena]\nn_agents = 2", ego='controller = "sumo"'), "ego.controller"),
     "val_sensor": scenario(base(ego='sensor = "eyes"'), "ego.sensor"),
     "val_layer": scenario(base(ego='layers = ["traffic", "hope"]'), "ego.layers[1]"),
     "val_layer_twice": scenario(base(ego='layers = ["traffic", "traffic"]'), "ego.layers[1]"),
@@ -167,6 +169,8 @@ CASES: dict[str, Case] = {
     "run_seed_not_int": _flag(["run", SCN, "--seed", "one"], ["--seed"]),
     "run_unknown_flag": _flag(["run", SCN, "--sed", "1"], ["--sed"]),
     "run_controller": _flag(["run", SCN, "--controller", "magic", "--out", "{tmp}/o"], ["ego.controller"]),
+    "run_controller_sumo_in_arena": _flag(["run", ARENA, "--set", 'ego.controller="sumo"', "--out", "{tmp}/o"],
+                                          ["ego.controller"]),
     "run_set_no_equals": _flag(["run", SCN, "--set", "sim.seed"], ["--set", "sim.seed"]),
     "run_set_empty_key": _flag(["run", SCN, "--set", ".seed=1"], [".seed"]),
     "run_set_into_value": _flag(["run", SCN, "--set", "sim.net.x=1"], ["sim.net"]),
@@ -304,6 +308,9 @@ CASES.update({
         SUITE.replace("collisions == 0", "sa_escapes_max <= 2") + 'controller = "apf"\n', "entry[0].criteria[0]"),
     "suite_criterion_second_entry": _suite_file(SUITE + SUITE.replace('"a"', '"b"').replace("collisions == 0", "mu >= 0"),
                                                 "entry[1].criteria[0]"),
+    "suite_criterion_ratio_in_an_arena": _suite_file(  # SUMO's driver, its baseline, cannot drive an arena's flock
+        SUITE.replace("{scn}", str(ARENA)).replace("collisions == 0", "travel_time_ratio_median <= 1.5"),
+        "entry[0].criteria[0]", names=("'travel_time_ratio_median'",)),
     "suite_duplicate_names": _suite_file(SUITE + SUITE, "entry[1].name"),
     "suite_no_seeds": _suite_file(SUITE.replace('seeds = "1"\n', ""), "entry[0].seeds"),
     "suite_seeds_flag": _suite_file(SUITE, "--seeds", argv=("--seeds", "x")),

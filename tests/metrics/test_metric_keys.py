@@ -23,6 +23,7 @@ RUNS = {  # scenario, overrides, controller: every controller, layer and extra m
     "ga_planner": ("planner/field", ["sim.duration_s=2"], None),
     "policy": ("overtaking", ["sim.duration_s=2", 'controllers.policy.policy="sumo_avoid.control.policy_examples:KeepLane"'],
                "policy"),
+    "sumo_driver+radar": ("overtaking", ["sim.duration_s=3", 'ego.sensor="radar"'], "sumo"),  # no layer, no monitor
 }
 
 

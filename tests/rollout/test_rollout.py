@@ -137,6 +137,7 @@ class FakeSim:
 
     def __init__(self, dt=0.5):
         self.dt, self.t, self.state, self.departed_now, self.released = dt, 0.0, {}, (), []
+        self.taken, self.applied = [], 0
         self.state["p"] = (np.array([500.0, 0.0]), 0.0, 0.0)
 
     def departed(self):
@@ -150,12 +151,16 @@ class FakeSim:
             self.departed_now = ("e",)
         return []
 
-    def take_over(self, vid):
+    def take_over(self, vid, drive=True):
+        self.taken.append((vid, drive))
         return type("Info", (), {"route_edges": ("r",), "lane_index": 0, "width_m": 1.8, "length_m": 5.0,
                                  "vclass": "passenger"})()
 
     def follow_route(self, task):
         pass
+
+    def arrived(self):
+        return frozenset()
 
     def read(self):
         ids = tuple(self.state)
@@ -167,6 +172,7 @@ class FakeSim:
                         [v == "e" for v in ids])
 
     def apply(self, ids, pos, heading, speed):
+        self.applied += 1
         for k, v in enumerate(ids):
             self.state[v] = (np.asarray(pos[k], float), float(heading[k]), float(speed[k]))
 
@@ -198,6 +204,55 @@ def test_loop_takes_over_drives_and_retires_at_the_goal_with_a_fake_simulator():
     t = rec.table()
     assert set(t["id"]) == {"e", "p"}
     assert t.loc[t["id"] == "e", "x"].max() == pytest.approx(95.0)
+
+
+def test_an_ego_left_to_sumo_is_taken_over_without_driving_and_never_sensed_controlled_or_moved():
+    """Needs(drives=False) (controller "sumo"): the ego is an ego (taken over with drive=False, a goal,
+    recorded, retired there) but the loop hands nobody to the sensor, controller, layers or actuator."""
+    sim = FakeSim()
+    ctl = ToyController(ToyParams(speed_mps=10.0))
+    layer = ScaleLayer()
+    stack = Stack(TruthSensor(), ctl, (layer,), KinematicActuator(KinematicParams(), Context(1, sim.dt)))
+    egos = EgoBook({"e"}, StraightRoad(), goal_tolerance_m=5.0, cruise_speed_mps=10.0, drives=False)
+    rec = Recorder()
+    assert rollout(sim, stack, egos, rec, n_steps=20) == 20
+    assert sim.taken == [("e", False)] and sim.applied == 0
+    assert ctl.seen == [] and layer.calls == 0 and egos.goals == {"e": (100.0, 0.0)}
+    t = rec.table()
+    assert t.loc[t["id"] == "e", "is_ego"].all() and (t.loc[t["id"] == "e", "x"] == 0.0).all()
+    assert egos.arrivals == {} and not egos.finished
+
+
+class ArrivingSim(FakeSim):
+    """SUMO takes ego 'e' out at the end of its route at t = 3 s (last recorded at 2.5 s)."""
+
+    def __init__(self):
+        super().__init__()
+        self.gone = frozenset()
+
+    def step(self):
+        out = super().step()
+        self.gone = frozenset()
+        if abs(self.t - 3.0) < 1e-9:
+            self.state.pop("e")
+            self.gone = frozenset({"e"})
+        return out
+
+    def arrived(self):
+        return self.gone
+
+
+@pytest.mark.parametrize("drives, goal, arrivals", [(False, None, {"e": 2.5}), (False, "r", {"e": 2.5}),
+                                                    (False, (50.0, 0.0), {}), (True, None, {})])
+def test_an_ego_sumo_drives_to_its_route_end_reaches_a_goal_there(drives, goal, arrivals):
+    """Only an ego SUMO drives, only at its route's end (no goal given, or its last edge): a point goal
+    is reached at the point, and a driven ego at its goal point (the plug-in drives it there)."""
+    sim = ArrivingSim()
+    stack = Stack(TruthSensor(), ToyController(ToyParams(speed_mps=0.0)), (),
+                  KinematicActuator(KinematicParams(), Context(1, sim.dt)))
+    egos = EgoBook({"e"}, StraightRoad(), goal=goal, goal_tolerance_m=5.0, cruise_speed_mps=10.0, drives=drives)
+    rollout(sim, stack, egos, Recorder(), n_steps=20)
+    assert egos.arrivals == arrivals and egos.finished == {"e"}
 
 
 def test_loop_stops_at_n_steps_without_egos():
