@@ -24,7 +24,9 @@ field, and the command is mapped back to the plane. Per ego and step:
   only from ``rho0_min``. A vehicle whose footprint does not overlap the ego's across the road
   (d, with ``gov_margin_m``; oncoming traffic in its lane, a car in the next lane) is felt from
   ``rho0_beside_m`` plus the lateral stopping distance of its closing speed across the road, and
-  pushes only across it (no component along s): the ego can pass it.
+  pushes only across it (no component along s): the ego can pass it. What is nearest to the ego's
+  rear half (behind its centre) pushes only along the road: the car turns about its centre to move
+  sideways, which swings the rear half towards it.
 * **Velocity**: the ego moves along F (direction F/|F|) at ``min(cruise, |F| * cruise / F_att_max,
   v_safe, v_curve)``: at the potential's minimum it stops; ``v_curve`` is the speed for the road
   ahead (SPEC §5: sqrt(a_lat / |kappa|) within braking distance, RouteFrame.curve_speed_limit). ``v_safe`` is a speed governor: the speed from
@@ -197,6 +199,10 @@ class ApfDriver:
                                                       + p.rho0_headway_s * np.hypot(*v_ego)))
             Ur, Fr = repulsion(rho, away, rho0, p.k_rep)
             Fr[:, 0] = np.where(beside, 0.0, Fr[:, 0])  # ... and pushes only across it, never back
+            # a car moves sideways only by turning, and turning swings its rear half the other way:
+            # what is nearest to the rear half pushes it along the road only, never across
+            rear = ((p_ego - np.repeat(q_cand, O, axis=0)) @ hd) < 0.0
+            Fr[:, 1] = np.where(rear, 0.0, Fr[:, 1])
             U = U + Ur.reshape(C, O).sum(axis=1)
             F = F + Fr.reshape(C, O, 2).sum(axis=1)
             v_safe = self._governor(q_cand[0], hd, L, W, oc, sc.o_vel, squeeze[:O])
