@@ -1,7 +1,7 @@
 """The GA planner on a road: what it plans with in the ego's route frame (s along the route, d
 across it, left positive; :mod:`sumo_avoid.road.frenet`). Pure numpy, no SUMO.
 
-* **Walls**: the corridor of the lanes of the ego's direction ([d_lo(s), d_hi(s)],
+* **Walls**: the corridor of the lanes of the ego's direction its class may use ([d_lo(s), d_hi(s)],
   :func:`all_lanes_corridor`: every lane of each edge, bridged across junctions). Waypoints are kept ``margin`` inside it
   (:func:`corridor_clip`) and both bounds are also obstacle points every ``step_m``
   (:func:`wall_points`, moved outwards by the safety radius less that margin), so a segment
@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sumo_avoid.road.route import LanePiece
+from sumo_avoid.road.route import LanePiece, lane_bounds
 
 #: Waypoints are kept this much further inside the lanes than the lane bounds' points require: a
 #: segment between two waypoints at the margin passes closer to the bound's points where the
@@ -46,17 +46,20 @@ def in_frame(xy, pos, frame, s0: float, s_end: float, reach_m: float) -> tuple[n
     return np.column_stack([s, d])[keep], idx[keep]
 
 
-def lane_centres(pieces: tuple[LanePiece, ...], s: float) -> np.ndarray:
-    """(K,) d of the centres of the lanes of the edge at arc length ``s`` (linear over its piece), m."""
+def lane_centres(pieces: tuple[LanePiece, ...], s: float, usable_only: bool = False) -> np.ndarray:
+    """(K,) d of the centres of the lanes of the edge at arc length ``s`` (linear over its piece), m;
+    with ``usable_only`` those the ego's class may use (:meth:`LanePiece.usable`)."""
     starts = np.array([p.s_start_m for p in pieces])
     p = pieces[int(np.clip(np.searchsorted(starts, s, side="right") - 1, 0, len(pieces) - 1))]
     f = 0.0 if p.s_end_m <= p.s_start_m else float(np.clip((s - p.s_start_m) / (p.s_end_m - p.s_start_m), 0.0, 1.0))
-    return (1.0 - f) * np.asarray(p.offsets_start_m, float) + f * np.asarray(p.offsets_end_m, float)
+    c = (1.0 - f) * np.asarray(p.offsets_start_m, float) + f * np.asarray(p.offsets_end_m, float)
+    return c[p.usable()] if usable_only else c
 
 
 def all_lanes_corridor(pieces: tuple[LanePiece, ...]):
     """A function s (N,) -> (d_lo (N,), d_hi (N,)): the bounds of all the lanes of each edge of the
-    route (every lane of the ego's direction, to its very end: no taper before a junction), bridged
+    route its vehicle class may use (:meth:`LanePiece.usable`: not a sidewalk, bike or bus lane for a
+    car; every such lane of the ego's direction, to its very end: no taper before a junction), bridged
     linearly across junctions (from the bounds where the edge before ends to where the next one
     starts). Exact where the lanes run on through a junction; at a turn an approximation (the
     planner's walls; :class:`~sumo_avoid.road.route_lanes.RouteLanes` has the lane-keeping corridor)."""
@@ -64,10 +67,9 @@ def all_lanes_corridor(pieces: tuple[LanePiece, ...]):
     for piece in pieces:
         if piece.edge.startswith(":"):
             continue  # inside a junction: the line from the last bound to the next
-        w = np.asarray(piece.widths_m, float)
+        w, ok = np.asarray(piece.widths_m, float), piece.usable()
         for s, off in ((piece.s_start_m, piece.offsets_start_m), (piece.s_end_m, piece.offsets_end_m)):
-            o = np.asarray(off, float)
-            pts.append((s, float((o - 0.5 * w).min()), float((o + 0.5 * w).max())))
+            pts.append((s, *lane_bounds(off, w, ok)))
     s = np.maximum.accumulate(np.array([q[0] for q in pts]) + 1e-6 * np.arange(len(pts)))
     lo, hi = np.array([q[1] for q in pts]), np.array([q[2] for q in pts])
 

@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from sumo_avoid.core.geometry import footprint_corners
+
 from sumo_avoid.sensing.perception import velocity_estimate
 
 _KEY = 1 << 32  # cell (i, j) -> one int64 key i * 2^32 + j
@@ -65,8 +67,7 @@ class RadarMap:
         ret = np.asarray(returns, float).reshape(-1, 2)
         if len(ret) == 0:
             return False
-        new = True if len(self._returns) == 0 else bool(
-            (np.hypot(*(ret[:, None] - self._returns[None]).transpose(2, 0, 1)).min(axis=1) > self.new_gap_m).any())
+        new = farther_than(ret, self._returns, self.new_gap_m)
         sight = ret - np.broadcast_to(np.asarray(sensor_pos, float), ret.shape)
         u = sight / np.maximum(np.hypot(*sight.T), 1e-9)[:, None]
         behind = (ret[:, None] + self.shadow[None, :, None] * u[:, None]).reshape(-1, 2)
@@ -138,3 +139,23 @@ def sampled_edges(polygons, step_m: float) -> np.ndarray:
             k = max(1, int(np.ceil(np.hypot(*(b - a)) / step_m)))
             out.append(a + np.linspace(0.0, 1.0, k, endpoint=False)[:, None] * (b - a))
     return np.concatenate(out)
+
+
+def standing_edges(snap, row: int, static_speed_mps: float, radius_m: float, step_m: float) -> np.ndarray:
+    """Ground truth's counterpart of the radar's static returns on a road: points every ``step_m``
+    along the footprints of the road users (vehicles and persons, other egos included) within
+    ``radius_m`` of snapshot ``row`` (the ego, left out) that move slower than ``static_speed_mps``."""
+    near = np.hypot(*(snap.pos - snap.pos[row]).T) < radius_m
+    near &= np.hypot(*snap.vel.T) < static_speed_mps
+    near[row] = False
+    k = np.flatnonzero(near)
+    return sampled_edges(footprint_corners(snap.pos[k], snap.heading[k], snap.length[k], snap.width[k]), step_m)
+
+
+def farther_than(pts: np.ndarray, known: np.ndarray, gap_m: float) -> bool:
+    """Does a point of ``pts`` lie farther than ``gap_m`` from every point of ``known``?"""
+    if not len(pts):
+        return False
+    if not len(known):
+        return True
+    return bool((np.hypot(*(pts[:, None, :] - known[None, :, :]).transpose(2, 0, 1)).min(axis=1) > gap_m).any())

@@ -24,6 +24,19 @@ def test_all_lanes_corridor_spans_every_lane_and_bridges_the_junction():
     assert lo == pytest.approx([-1.75] * 3) and hi == pytest.approx([8.75] * 3)  # no taper, no narrowing
 
 
+def test_the_corridor_and_lane_centres_leave_out_lanes_the_ego_may_not_use():
+    # lane 0 a bike lane (1.5 m, centre d -2.5), lane 1 the car lane (centre 0), lane 2 a bus lane
+    # (centre 3.5): a car's planner walls span the car lane alone (-1.75 .. 1.75); its own lane is
+    # always usable (LanePiece.usable)
+    from sumo_avoid.planning.corridor import lane_centres
+
+    pieces = (LanePiece(0.0, 100.0, "a", 1, (-2.5, 0.0, 3.5), (-2.5, 0.0, 3.5), (1.5, 3.5, 3.5), (False, True, False)),)
+    lo, hi = all_lanes_corridor(pieces)(np.array([0.0, 50.0, 100.0]))
+    assert lo == pytest.approx([-1.75] * 3) and hi == pytest.approx([1.75] * 3)
+    assert lane_centres(pieces, 50.0, usable_only=True) == pytest.approx([0.0])
+    assert lane_centres(pieces, 50.0) == pytest.approx([-2.5, 0.0, 3.5])
+
+
 def test_meeting_points_of_a_slower_car_ahead():
     # ego at s 0 planned at 10 m/s, car 20 m ahead in the next lane at 5 m/s, both 4.5 m long:
     # G = 4.5 + 6 = 10.5; |20 - 5 t| < 10.5 for t in (1.9, 6.1): the ego covers s 19 .. 61

@@ -4,7 +4,8 @@ Per ego: a :class:`~sumo_avoid.planning.radar_map.RadarMap` collects the static 
 radar (``ego.sensor = "radar"``: ``Observation.detections``, tracker memory included; no target
 ids, no ground truth). With ``ego.sensor = "truth"`` the map is the scenario's obstacle polygons
 sampled every ``map_cell_m`` along their edges, all known from the start (to separate perception
-effects from planning). The GA (:mod:`sumo_avoid.planning.ga`) plans a path from the ego to its
+effects from planning); on a road, the footprints of the road users standing there at each step
+(:func:`~sumo_avoid.planning.radar_map.standing_edges`). The GA (:mod:`sumo_avoid.planning.ga`) plans a path from the ego to its
 goal:
 
 * at take-over (trigger ``takeover``);
@@ -57,7 +58,7 @@ from sumo_avoid.planning.pursuit import (
     pursuit_velocity,
     rest_of,
 )
-from sumo_avoid.planning.radar_map import RadarMap, sampled_edges, static_returns
+from sumo_avoid.planning.radar_map import RadarMap, farther_than, sampled_edges, standing_edges, static_returns
 from sumo_avoid.planning.corridor import (
     CLIP_SLACK_M,
     all_lanes_corridor,
@@ -163,6 +164,7 @@ class _Ego:
     last_plan_s: float = -np.inf
     pending: str = ""
     truth: bool = False  # no radar (ego.sensor = "truth"): the scenario's obstacles, all known
+    standing: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # truth on a road: what stands now
     reverse_until_s: float = -np.inf
     reverse_turn: float = 0.0  # +1: back up turning the nose left, -1: right
     view: RoadView | None = None  # on a road: the route frame the plans are made in
@@ -227,8 +229,14 @@ class GaPlannerController(BaseController):
 
     def _points(self, st: _Ego) -> np.ndarray:
         if st.truth:
-            return self.truth_points
+            return self.truth_points if st.view is None else st.standing
         return st.map.points if st.view is None else st.map.seen_since(st.now - self.p.road_memory_s)[0]
+
+    def _static_road(self, st: _Ego) -> tuple[np.ndarray, np.ndarray]:
+        """On a road: (points (M, 2), the range each was measured at (M,)), what stands there."""
+        if st.truth:
+            return st.standing, np.hypot(*(st.standing - st.pos).T)
+        return st.map.seen_since(st.now - self.pr.road_memory_s)
 
     def _trigger(self, st: _Ego, obs: Observation, vid: str, pos, t: float) -> str:
         p = self._params(st)
@@ -237,6 +245,12 @@ class GaPlannerController(BaseController):
             along = None if st.view is None or obs.route_heading is None else float(obs.route_heading[obs.index(vid)])
             pts, src = static_returns(obs, vid, p.static_speed_mps, along, p.road_static_min_cos)
             if st.map.add(src, pts, t) and st.path is not None:
+                st.pending = st.pending or "new_obstacle"
+        elif st.view is not None:  # ground truth on a road: the road users standing there now
+            pts = standing_edges(obs.snapshot, int(obs.ego_rows[obs.index(vid)]), p.static_speed_mps,
+                                 p.road_sense_radius_m, p.map_cell_m)
+            new, st.standing = farther_than(pts, st.standing, p.new_obstacle_gap_m), pts
+            if new and st.path is not None:
                 st.pending = st.pending or "new_obstacle"
         if st.path is None:
             return "takeover"
@@ -275,7 +289,7 @@ class GaPlannerController(BaseController):
         p, view = self.pr, st.view
         s0, d0 = sc.s, sc.d
         s_end = min(s0 + p.road_horizon_m, float(view.goal[0]))
-        xy, ranges = st.map.seen_since(st.now - p.road_memory_s)
+        xy, ranges = self._static_road(st)
         sd, idx = in_frame(xy, st.pos, view.frame, s0, s_end, p.road_horizon_m + 20.0)
         static = whole_lanes(sd, ranges[idx], st.task.lanes, s0, p.road_lane_tol_m, p.road_lane_tol_per_m,
                              p.shadow_depth_m, p.shadow_step_m)
@@ -289,7 +303,8 @@ class GaPlannerController(BaseController):
         if s_end >= float(view.goal[0]):
             goal = view.goal
         else:
-            goal = np.array([s_end, pick_lane(lane_centres(st.task.lanes, s_end), d0, s_end, known, p.road_lane_free_m)])
+            goal = np.array([s_end, pick_lane(lane_centres(st.task.lanes, s_end, usable_only=True), d0, s_end, known,
+                                              p.road_lane_free_m)])
         walls = wall_points(st.corridor, s0 - 5.0, s_end + 10.0, p.road_wall_step_m,
                             p.road_safety_radius_m - p.road_wall_margin_m)
         pts = np.concatenate([known, walls])
@@ -305,7 +320,7 @@ class GaPlannerController(BaseController):
         if res.usable:
             drive = res.path
         else:
-            c = lane_centres(st.task.lanes, s0)
+            c = lane_centres(st.task.lanes, s0, usable_only=True)
             own = float(c[np.argmin(np.abs(c - d0))])
             drive = np.array([[s0, d0], [min(s0 + p.road_settle_m, s_end - 1.0), own], [s_end, own]])
         dense = resample(drive, max(2, int(np.ceil(arc_lengths(drive)[-1] / 2.0)) + 1))
