@@ -142,9 +142,9 @@ class ApfDriver:
     def lookahead(self, speed: float) -> float:
         return max(self.p.lookahead_min_m, self.p.lookahead_time_s * abs(speed))
 
-    def carrot(self, view: RoadView, sc: FrenetScene, lateral_offset: float = 0.0) -> np.ndarray:
-        """(s, d) the attraction pulls towards."""
-        ahead = self.lookahead(float(np.hypot(*sc.vel)))
+    def carrot(self, view: RoadView, sc: FrenetScene, lateral_offset: float = 0.0, within_m: float = np.inf) -> np.ndarray:
+        """(s, d) the attraction pulls towards (at most ``within_m`` ahead: a lateral move to finish by then)."""
+        ahead = min(self.lookahead(float(np.hypot(*sc.vel))), within_m)
         if np.hypot(*(view.goal - sc.q)) <= ahead and lateral_offset == 0.0:
             return view.goal
         return np.array([min(sc.s + ahead, view.length_m), lateral_offset])

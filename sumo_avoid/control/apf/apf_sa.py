@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sumo_avoid.control.apf.apf import ApfDriver, ApfParams
-from sumo_avoid.control.apf.oncoming_pass import ABORT_D_M, RADAR_SIGHT_M, OncomingPass, PassParams
+from sumo_avoid.control.apf.oncoming_pass import ABORT_D_M, PASS_CARROT_MIN_M, RADAR_SIGHT_M, OncomingPass, PassParams
 from sumo_avoid.control.base_controller import BaseController
 from sumo_avoid.control.road_view import FrenetScene, RoadView
 from sumo_avoid.core.config import FieldError, field_doc
@@ -90,6 +90,7 @@ class _EgoState:
     failures: int = 0  # searches in a row that found no escape (the wait before the next doubles)
     pass_rear_s: float = math.nan  # while passing: the blocker's rear (s); the pass is called off before it
     pass_checked_s: float = -math.inf  # when the oncoming lane was last looked at for a pass
+    pass_ready: bool = False  # behind a vehicle it may pass, waiting for the oncoming lane: room made, held
 
 
 class ApfSaController(BaseController):
@@ -144,7 +145,7 @@ class ApfSaController(BaseController):
             offset, v_lane = view.lane_change(sc, drv.lookahead(speed), a.gov_decel_mps2, drv.step_s)  # the path's lane changes wait for a gap
             if st.escape_offset is not None:
                 offset, v_lane = st.escape_offset, np.inf
-            target = drv.carrot(view, sc, offset)
+            target = drv.carrot(view, sc, offset, self._pass_reach(view, sc, st))
             fld = drv.field(sc, sc.q[None, :], target)
             force = float(np.hypot(*fld.F[0]))
             v_road = min(drv.road_speed(view, sc), v_lane)  # waiting for a gap is not being trapped
@@ -180,6 +181,8 @@ class ApfSaController(BaseController):
                              may_reverse=sees_behind and self._clear_behind(sc))
             if st.escape_offset is not None:
                 v = self._make_room(st, sc, v, fld.v_safe, sees_behind)
+            elif st.pass_ready:
+                v = self._wait_to_pass(st, sc, sees_behind)
             out[k] = view.to_xy_velocity(sc.s, sc.d, v, drv.step_s)
         return out
 
@@ -201,12 +204,41 @@ class ApfSaController(BaseController):
 
     def _try_pass(self, vid, view, sc, st, obs, row, task) -> None:
         sight = RADAR_SIGHT_M if obs.detections is not None else math.inf
-        stretch = self.passer.start(vid, view, sc, obs.snapshot.time_s, task, task.cruise_speed_mps, sight,
+        t = obs.snapshot.time_s
+        stretch = self.passer.start(vid, view, sc, t, task, task.cruise_speed_mps, sight,
                                     self._oncoming(view, obs, row, sc))
         if stretch is not None:
             s_from, s_to, st.pass_rear_s = stretch
             view.passing = (s_from, s_to)
             self.passes += 1
+            st.pass_ready = False
+        elif np.hypot(*sc.vel) <= 0.3:  # decided standing (backing up to make room it keeps its decision)
+            # the oncoming lane is not free yet: make the room the pass starts from now (as _make_room
+            # would once it is), so the pass then needs only its own time (sees behind: may back up)
+            sees_behind = obs.detections is None or any(d.mount == "rear" for d in obs.detections)
+            st.pass_ready = sees_behind and self.passer.candidate(vid, view, sc, t, task) is not None
+
+    def _pass_reach(self, view: RoadView, sc: FrenetScene, st: _EgoState) -> float:
+        """How far ahead the carrot may lie: while a pass moves the ego out behind the blocker, half the
+        gap to the blocker's rear (at least ``PASS_CARROT_MIN_M``), so that it is out before it gets
+        there (the carrot's usual 15 m turn it out too slowly from the room it starts in)."""
+        if view.passing is None or not math.isfinite(st.pass_rear_s):
+            return math.inf
+        gap = st.pass_rear_s - (sc.s + 0.5 * sc.length)
+        return max(0.5 * gap, PASS_CARROT_MIN_M) if gap > 0.0 else math.inf
+
+    def _wait_to_pass(self, st: _EgoState, sc: FrenetScene, sees_behind: bool) -> np.ndarray:
+        """Behind a vehicle it may pass, the oncoming lane not yet free: back up straight along the road
+        until ``escape_room_m`` (at least the carrot distance) is free ahead, then stand; on as soon as no
+        vehicle stands ahead any more."""
+        if self.passer.blocker(sc) is None:
+            st.pass_ready = False
+            st.history.clear()
+            return np.zeros(2)
+        room = self._room_ahead(sc, heading=0.0)
+        if room >= max(self.p.escape_room_m, self.driver.lookahead(0.0)) or not (sees_behind and self._clear_behind(sc)):
+            return np.zeros(2)
+        return self._back_up(sc)
 
     def _keep_passing(self, view, sc, st, obs, row, task) -> None:
         """End the pass once the ego's rear is past its stretch; call it off while the ego is still in its
@@ -260,12 +292,14 @@ class ApfSaController(BaseController):
                 return v_des
             if not (sees_behind and self._clear_behind(sc)):  # never back into traffic, nor blind
                 return np.zeros(2)
-            # back up against the route direction, so the nose straightens while the lateral
-            # offset already won is kept (a three-point manoeuvre rather than undoing the turn)
-            fwd = np.array([math.cos(sc.heading), math.sin(sc.heading)])
-            back = np.array([-1.0, 0.0]) if fwd[0] > 0.0 else -fwd
-            return self.p.escape_reverse_speed_mps * back
+            return self._back_up(sc)
         return v_des
+
+    def _back_up(self, sc: FrenetScene) -> np.ndarray:
+        """Reverse against the route direction, so the nose straightens while the lateral offset
+        already won is kept (a three-point manoeuvre rather than undoing the turn)."""
+        fwd = np.array([math.cos(sc.heading), math.sin(sc.heading)])
+        return self.p.escape_reverse_speed_mps * (np.array([-1.0, 0.0]) if fwd[0] > 0.0 else -fwd)
 
     def _strip(self, sc: FrenetScene, pos, heading: float):
         """The other vehicles against a strip of half width W/2 + ``gov_margin_m`` through ``pos``

@@ -20,8 +20,18 @@ a lane its class may use) for a pass, as a driver does, when all of this holds:
   to its cruise speed) plus ``pass_margin_s``, and the ego sees far enough for a car at
   ``pass_oncoming_mps`` it cannot see yet (a radar sees ``max_range_m``, ground truth everything).
 
+While all of this but a free oncoming lane holds (:meth:`OncomingPass.candidate`), an ego that sees
+behind it (ground truth or a rear radar) makes its room first: it backs up in its lane until
+``escape_room_m`` (at least the carrot's distance) is free ahead and stands there (``ApfSaController.
+_wait_to_pass``), so the pass, once the lane is free, needs only its own time, not the back-up's too
+(about 9 s less of free oncoming lane: van_bike_lane with ground truth, 7 of 10 seeds pass instead of 4);
+it drives on as before once nothing stands ahead any more.
+
 While it passes, the oncoming lane belongs to its corridor (``RoadView.passing``), so the escape search
-and the field use it. The pass ends when the ego's rear is past the stretch; it is called off while the
+and the field use it; until its front reaches the blocker's rear the carrot lies at most half that gap
+ahead (:data:`PASS_CARROT_MIN_M` at least), so the car is out of its lane before it gets there (with the
+carrot's usual 15 m it was not, stopped at the van's corner half in the oncoming lane, backed up and went
+again without looking: seeds 7 and 8 touched oncoming cars). The pass ends when the ego's rear is past the stretch; it is called off while the
 ego is still in its own lane (its centre within ``ABORT_D_M`` of the lane's) and an oncoming vehicle
 would reach the stretch's end before it; once it has moved out it completes the pass (half in the
 oncoming lane is the one place not to stop). Driving in the oncoming lane is
@@ -39,6 +49,7 @@ from sumo_avoid.core.geometry import footprint_corners
 
 STAND_MPS = 0.5  # a blocker slower than this stands, m/s
 ABORT_D_M = 0.5  # a pass is called off only while the ego's centre is this close to its lane's centre, m
+PASS_CARROT_MIN_M = 5.0  # moving out behind the blocker, the carrot lies at least this far ahead, m
 RADAR_SIGHT_M = 100.0  # how far a radar-driven ego sees the oncoming lane (the radar's default range), m
 
 
@@ -94,9 +105,9 @@ class OncomingPass:
             (rel[..., 0].min(axis=1) + sc.q[0] < front + self.p.pass_queue_gap_m)
         return None if beyond.any() else (float(rear), float(front))
 
-    def start(self, vid, view, sc, t: float, task, cruise_mps: float, sight_m: float, oncoming) -> tuple | None:
-        """The stretch (s_from, s_to) to borrow the oncoming lane for now and the blocker's rear s, or None. ``oncoming(s_from,
-        s_to_far)`` returns the (s, s_dot) of the vehicles sensed in the oncoming lane over that range."""
+    def candidate(self, vid, view, sc, t: float, task) -> tuple | None:
+        """(blocker's rear s, its front s, s_from, s_to) when the ego stands behind a vehicle it may pass
+        (every condition of the module doc but a free oncoming lane), else None."""
         p = self.p
         if not p.pass_oncoming or view.lanes is None or np.hypot(*sc.vel) > 0.3:
             return None  # decided standing behind it (the time the pass needs is known then)
@@ -116,6 +127,16 @@ class OncomingPass:
         s_from, s_to = sc.s - sc.length - self.room_m, b[1] + sc.length + p.pass_return_m
         if float(view.lanes.opposite(np.linspace(s_from, s_to, 24)).min()) <= 0.0:
             return None
+        return b[0], b[1], s_from, s_to
+
+    def start(self, vid, view, sc, t: float, task, cruise_mps: float, sight_m: float, oncoming) -> tuple | None:
+        """The stretch (s_from, s_to) to borrow the oncoming lane for now and the blocker's rear s, or None. ``oncoming(s_from,
+        s_to_far)`` returns the (s, s_dot) of the vehicles sensed in the oncoming lane over that range."""
+        p = self.p
+        c = self.candidate(vid, view, sc, t, task)
+        if c is None:
+            return None
+        b, (s_from, s_to) = c[:2], c[2:]
         # standing close behind it the ego first backs up to escape_room_m (apf_sa._make_room)
         back = max(self.room_m - (b[0] - sc.s - 0.5 * sc.length), 0.0)
         t_pass = (back / self.reverse_mps + 2.0 if back > 0 else 0.0) + \
