@@ -1,6 +1,8 @@
 """A run replayed in sumo-gui on its own net: every recorded vehicle and person put where the
 recording has it at each recorded step (TraCI's ``moveToXY``, exact position and heading; SUMO's
-own driving and collision handling are off), the egos magenta and followed (the view centred on the first ego), a point of interest at
+own driving and collision handling are off; persons are purple discs of their size, SUMO's
+pedestrian models either ignoring ``moveToXY`` (nonInteracting) or failing on many moved persons
+(striping)), the egos magenta and followed (the view centred on the first ego), a point of interest at
 each event (time, what, with whom), the traffic lights set to their recorded states.
 
 Why TraCI and not SUMO's fcd-replay device: the recording holds centres and math headings of every
@@ -28,6 +30,7 @@ from sumo_avoid.watch.recording import Recording
 
 EGO_RGBA = (255, 0, 255, 255)
 OTHER_RGBA = (60, 150, 60, 255)
+PERSON_RGBA = (122, 43, 209, 255)
 VIEW = "View #0"
 SETTINGS = """<viewsettings><scheme name="sumo-avoid replay"><background backgroundColor="238,241,234"/>
 <vehicles vehicleMode="0" vehicleQuality="2" minVehicleSize="1" vehicleExaggeration="1" showBlinker="0"/>
@@ -64,7 +67,8 @@ def _edge(lane) -> str:
 def _command(rec: Recording, begin_s: float, spec: ReplaySpec, settings: pathlib.Path) -> list[str]:
     return [sumo_gui(), "-n", str(rec.net_file), "--step-length", str(rec.step_s), "--begin", f"{begin_s:.6f}",
             "--start", "--quit-on-end", "--no-step-log", "--no-warnings", "--collision.action", "none",
-            "--time-to-teleport", "-1", "--gui-settings-file", str(settings), "--window-size", "1100,760"]
+            "--time-to-teleport", "-1", "--gui-settings-file", str(settings), "--window-size", "1100,760",
+            "--error-log", str(settings.with_name("sumo-gui.log"))]
 
 
 def replay(rec: Recording, spec: ReplaySpec, work: pathlib.Path) -> dict:
@@ -85,7 +89,7 @@ def replay(rec: Recording, spec: ReplaySpec, work: pathlib.Path) -> dict:
     out = {"steps": 0, "screenshot": None, "bounds": None}
     try:
         _setup(con, rec)
-        present: set = set()
+        present: dict = {}
         signals = rec.signals.sort_values("time_s") if rec.signals is not None else None
         by_time = {round(t, 6): g for t, g in rows.groupby(rows["time_s"].round(6))}
         shot_t = None if spec.screenshot is None else shown[np.argmin(np.abs(shown - (spec.screenshot_at_s or t0)))]
@@ -126,27 +130,21 @@ def _setup(con, rec: Recording) -> None:
             con.poi.add(f"event{i}", e.x_m, e.y_m, colour, poiType=e.label, layer=100, width=3, height=3)
 
 
-def _place(con, rec: Recording, g: pd.DataFrame, present: set) -> set:
-    """Put every road user of one recorded step where it was; remove those no longer recorded."""
-    now = set(g["id"].astype(str))
-    for vid in present - now:
-        if vid in _persons(g, present):
-            continue
-        try:
-            con.vehicle.remove(vid)
-        except Exception:  # noqa: BLE001 - a person, or already gone
-            try:
-                con.person.remove(vid)
-            except Exception:  # noqa: BLE001
-                pass
+def _place(con, rec: Recording, g: pd.DataFrame, present: dict) -> dict:
+    """Put every road user of one recorded step where it was; remove those no longer recorded.
+    ``present``: id -> "person" or "vehicle" of those in the GUI now."""
+    now = {str(r.id): ("person" if r.person else "vehicle") for r in g.itertuples(index=False)}
+    for vid in present.keys() - now.keys():
+        (con.poi if present[vid] == "person" else con.vehicle).remove(vid)
     for r in g.itertuples(index=False):
         vid = str(r.id)
         x, y, angle = front(r)
-        if r.person:
+        if r.person:  # a disc (a point of interest) of the person's size where the recording has the person
             if vid not in present:
-                con.person.add(vid, _edge(r.lane) or con.route.getEdges("replay_route")[0], 0.0)
-                con.person.appendWaitingStage(vid, 1e6)
-            con.person.moveToXY(vid, _edge(r.lane), x, y, angle, keepRoute=2)
+                con.poi.add(vid, float(r.x), float(r.y), PERSON_RGBA, poiType="", layer=50,
+                            width=max(0.5, float(r.length)), height=max(0.5, float(r.length)))
+            else:
+                con.poi.setPosition(vid, float(r.x), float(r.y))
             continue
         if vid not in present:
             tid = f"rec_{vid}"
@@ -160,10 +158,6 @@ def _place(con, rec: Recording, g: pd.DataFrame, present: set) -> set:
         con.vehicle.moveToXY(vid, _edge(r.lane), 0, x, y, angle, keepRoute=2)
         con.vehicle.setSpeed(vid, max(0.0, float(r.speed)))
     return now
-
-
-def _persons(g, present) -> set:
-    return set()
 
 
 def _wait_for(path: pathlib.Path, timeout_s: float = 10.0) -> None:

@@ -43,10 +43,14 @@ function road() { const rd = R.road; g.fillStyle = "#eef1ea"; g.fillRect(0, 0, c
   g.lineCap = "butt"; g.lineJoin = "round";
   for (const w of rd.walking || []) { path(w, true); g.fillStyle = KIND.sidewalk; g.fill(); }
   for (const j of rd.junctions) { path(j, true); g.fillStyle = KIND.road; g.fill(); }
-  for (const pass of [0, 1]) for (const l of rd.lanes) { path(l.shape, false);
+  for (const pass of [0, 1]) for (const l of rd.lanes) { if (l.internal && !pass) continue; path(l.shape, false);
     g.lineWidth = Math.max(1, (l.width - (pass ? 0.3 : 0)) * view.s); g.strokeStyle = pass ? KIND[l.kind] || KIND.road : "#ffffff"; g.stroke(); }
   for (const c of rd.crossings) { path(c.shape, false); g.lineWidth = c.width * view.s; g.strokeStyle = "#fff"; g.stroke();
     g.setLineDash([0.5 * view.s, 0.5 * view.s]); g.lineWidth = c.width * 0.8 * view.s; g.strokeStyle = "#666"; g.stroke(); g.setLineDash([]); } }
+const LIGHT = {G: "#00c000", g: "#007a00", y: "#ffd000", Y: "#ffd000", r: "#e00000", R: "#e00000", u: "#ff8000", s: "#8000c0"};
+function lights(sig) { g.lineWidth = Math.max(2, 0.5 * view.s); g.lineCap = "butt";
+  for (const b of R.road.signals || []) { const st = sig[b[0]], c = st ? LIGHT[st[b[1]]] : null; if (!c) continue;
+    g.strokeStyle = c; g.beginPath(); g.moveTo(X(b[2][0]), Y(b[2][1])); g.lineTo(X(b[3][0]), Y(b[3][1])); g.stroke(); } }
 function mark(x, y, col, txt, i) { if (x === null || y === null) return; g.strokeStyle = col; g.lineWidth = 3; const u = 7;
   g.beginPath(); g.moveTo(X(x) - u, Y(y) - u); g.lineTo(X(x) + u, Y(y) + u); g.moveTo(X(x) - u, Y(y) + u); g.lineTo(X(x) + u, Y(y) - u); g.stroke();
   if (txt) { g.fillStyle = col; g.font = "11px sans-serif"; g.fillText(txt, X(x) + 9, Y(y) - 12 - 14 * i); } }
@@ -58,10 +62,12 @@ function state() { const rs = rows(frame), fp = {}, touching = [];
 function draw() { const rs = rows(frame), ego = rs.find(r => r.a.ego);
   if (follow && ego) { view.cx = ego.x; view.cy = ego.y; }
   road();
+  const sig = {}; for (const s of R.signals) if (s[0] <= T[frame] + 1e-9) sig[s[1]] = s[2];
+  lights(sig);
   for (const gl of R.goals) { g.fillStyle = "gold"; g.beginPath(); g.arc(X(gl[1]), Y(gl[2]), 6, 0, 7); g.fill(); }
   rs.sort((a, b) => a.a.ego - b.a.ego);
   for (const r of rs) { g.fillStyle = r.a.ego ? EGO : r.a.person ? PERSON : OTHER;
-    if (r.a.person) { g.beginPath(); g.arc(X(r.x), Y(r.y), Math.max(2, r.a.length / 2 * view.s), 0, 7); g.fill(); continue; }
+    if (r.a.person) { g.beginPath(); g.arc(X(r.x), Y(r.y), Math.max(2, Math.max(0.3, r.a.length / 2) * view.s), 0, 7); g.fill(); continue; }
     path(corners(r), true); g.fill(); g.strokeStyle = "#111"; g.lineWidth = 1; g.stroke();
     if (r.a.ego || view.s > 6) { g.fillStyle = "#000"; g.font = "11px sans-serif"; g.fillText(r.a.id, X(r.x) + 4, Y(r.y) - 8); } }
   for (const r of rs) if (r.a.ego) { g.strokeStyle = "#00b3ff"; g.lineWidth = 2; g.beginPath(); g.moveTo(X(r.x), Y(r.y));
@@ -73,7 +79,6 @@ function draw() { const rs = rows(frame), ego = rs.find(r => r.a.ego);
   document.getElementById("clock").textContent = `t = ${T[frame].toFixed(2)} s of ${T[N - 1].toFixed(1)} s` + (R.stride > 1 ? ` (every ${R.stride}th step shown)` : "");
   document.getElementById("now").innerHTML = rs.filter(r => r.a.ego).map(r => `${r.a.id}: ${r.v.toFixed(2)} m/s at (${r.x.toFixed(1)}, ${r.y.toFixed(1)})`).join("<br>")
     + `<br>${rs.length} road users` + (st.touching.length ? `<br><b style="color:#e00000">touching: ${st.touching.map(p => p.join("–")).join(", ")}</b>` : "");
-  const sig = {}; for (const s of R.signals) if (s[0] <= T[frame] + 1e-9) sig[s[1]] = s[2];
   document.getElementById("sig").textContent = Object.keys(sig).length ? Object.entries(sig).map(e => e[0] + ": " + e[1]).join("\n") : "(none recorded)";
   document.getElementById("sig").style.whiteSpace = "pre";
   window.viewerState = st; document.getElementById("state").textContent = JSON.stringify(st); }
