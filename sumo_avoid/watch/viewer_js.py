@@ -53,7 +53,8 @@ function lights(sig) { g.lineWidth = Math.max(2, 0.5 * view.s); g.lineCap = "but
     g.strokeStyle = c; g.beginPath(); g.moveTo(X(b[2][0]), Y(b[2][1])); g.lineTo(X(b[3][0]), Y(b[3][1])); g.stroke(); } }
 function mark(x, y, col, txt, i) { if (x === null || y === null) return; g.strokeStyle = col; g.lineWidth = 3; const u = 7;
   g.beginPath(); g.moveTo(X(x) - u, Y(y) - u); g.lineTo(X(x) + u, Y(y) + u); g.moveTo(X(x) - u, Y(y) + u); g.lineTo(X(x) + u, Y(y) - u); g.stroke();
-  if (txt) { g.fillStyle = col; g.font = "11px sans-serif"; g.fillText(txt, X(x) + 9, Y(y) - 12 - 14 * i); } }
+  if (txt) { g.font = "11px sans-serif"; const ty = Y(y) - 12 - 15 * i; g.fillStyle = "rgba(255,255,255,0.85)";
+    g.fillRect(X(x) + 7, ty - 11, g.measureText(txt).width + 4, 14); g.fillStyle = col; g.fillText(txt, X(x) + 9, ty); } }
 function colour(k) { return k === "collision" ? "#e00000" : k === "ssm conflict" ? "#e0a800" : "#ff6a00"; }
 function state() { const rs = rows(frame), fp = {}, touching = [];
   for (const r of rs) fp[r.a.id] = corners(r);
