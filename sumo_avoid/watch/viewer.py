@@ -4,9 +4,10 @@ slider with play/pause and speed, the events as marks on the timeline that jump 
 radar detections (where the run logged them) and its recorded velocity as an overlay, the signals'
 recorded states and the metrics.
 
-Thinning (:func:`stride`): the page holds at most ``max_rows`` footprints (default 400 000, about
-12 MB of JSON at ~30 bytes a footprint); a run with more keeps every k-th recorded step (k the
-smallest that fits) and every step of an event, so a long big-traffic run stays below ~20 MB.
+Thinning (:func:`stride`): the page holds at most ``max_rows`` footprints, by default as many as fit
+into ``MAX_BYTES`` (18 MB) beside the road's JSON at ``BYTES_PER_ROW`` (40: a footprint's seven numbers
+take ~38 bytes); a run with more keeps every k-th recorded step (k the smallest that fits) and every
+step of an event, so a long big-traffic run's page stays below ~20 MB.
 
 The page exposes its state for tests and tools as ``window.viewerState`` and as JSON in
 ``<pre id="state">``: the shown time, frame, every footprint's corners and the pairs whose footprints
@@ -26,10 +27,12 @@ from sumo_avoid.watch.recording import Recording
 from sumo_avoid.watch.road_data import road_data
 from sumo_avoid.watch.viewer_js import CSS, SCRIPT
 
-MAX_ROWS = 400_000
+MAX_BYTES = 18_000_000
+BYTES_PER_ROW = 40
+MIN_ROWS = 20_000  # a road too big for the budget still leaves this many footprints
 
 
-def stride(n_rows: int, n_steps: int, max_rows: int = MAX_ROWS) -> int:
+def stride(n_rows: int, n_steps: int, max_rows: int) -> int:
     """Every how many recorded steps a frame is kept so that about ``max_rows`` footprints remain."""
     if n_rows <= max_rows or n_steps <= 1:
         return 1
@@ -40,7 +43,7 @@ def _r(a, nd: int) -> list:
     return np.round(np.asarray(a, float), nd).tolist()
 
 
-def page_data(rec: Recording, max_rows: int = MAX_ROWS) -> dict:
+def page_data(rec: Recording, max_rows: int | None = None) -> dict:
     """The JSON the page draws from (see the module docstring for the thinning)."""
     tables = [rec.traj.assign(person=False)]
     if rec.persons is not None and len(rec.persons):
@@ -49,6 +52,10 @@ def page_data(rec: Recording, max_rows: int = MAX_ROWS) -> dict:
     rows["t"] = rows["time_s"].round(6)
     times = np.array(sorted(rows["t"].unique()))
     evs = events(rec)
+    road = road_data(rec.net_file)
+    if max_rows is None:
+        road_bytes = len(json.dumps(road, separators=(",", ":")))
+        max_rows = max(MIN_ROWS, (MAX_BYTES - road_bytes) // BYTES_PER_ROW)
     k = stride(len(rows), len(times), max_rows)
     keep = set(times[::k].tolist()) | {times[-1]}
     for e in evs:  # the step of every event stays
@@ -67,7 +74,7 @@ def page_data(rec: Recording, max_rows: int = MAX_ROWS) -> dict:
                                           _r(a["speed"], 2), _r(a["vx"], 2), _r(a["vy"], 2)):
         frames[fi].extend((ai, x, y, h, v, vx, vy))
     return {"title": rec.title, "step_s": rec.step_s, "stride": k, "times": kept.tolist(), "actors": actors,
-            "frames": frames, "road": road_data(rec.net_file),
+            "frames": frames, "road": road,
             "events": [{"t": e.time_s, "kind": e.kind, "label": e.label, "x": _fin(e.x_m), "y": _fin(e.y_m),
                         "ego": e.ego, "other": e.other} for e in evs],
             "detections": _detections(rec, kept), "signals": _signals(rec), "metrics": _scalars(rec.metrics),
@@ -110,7 +117,7 @@ def _scalars(m: dict) -> list:
             for k, v in sorted(m.items()) if v is None or isinstance(v, (bool, int, float, str))]
 
 
-def viewer_html(rec: Recording, max_rows: int = MAX_ROWS) -> str:
+def viewer_html(rec: Recording, max_rows: int | None = None) -> str:
     """The whole page, one string."""
     data = json.dumps(page_data(rec, max_rows), separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
     title = html.escape(f"run viewer: {rec.title}")

@@ -57,3 +57,22 @@ def test_thinning_keeps_every_event_step_and_the_file_small(crash_run):
     assert all(any(abs(t - e["t"]) < 1e-9 for t in thin["times"]) for e in thin["events"])
     page = viewer_html(rec)
     assert len(page) < 20e6 and not re.search(r"(src|href)\s*=", page)  # nothing to fetch: works offline
+
+
+def test_a_big_traffic_run_is_thinned_below_20_mb(crash_run):
+    """500 vehicles for 120 s at 0.1 s (600 000 footprints): every k-th step kept, the page < 20 MB."""
+    import dataclasses
+
+    import numpy as np
+    import pandas as pd
+
+    rec = recording.load(crash_run)
+    steps, n = 1200, 500
+    s, v = np.repeat(np.arange(1, steps + 1), n), np.tile(np.arange(n), steps)
+    big = pd.DataFrame({"step": s, "time_s": s * 0.1, "id": [f"v{i}" for i in v], "is_ego": v == 0,
+                        "x": 1000 * np.random.default_rng(1).random(len(s)) + 0.123456, "y": -8.75 + 0.0 * s,
+                        "vx": 13.891, "vy": 0.0, "speed": 13.891, "heading": 0.012345, "length": 4.5, "width": 1.8})
+    rec = dataclasses.replace(rec, traj=big, ssm=None)
+    page = viewer_html(rec)
+    data = json.loads(page.split("window.RUN=")[1].split(";</script>")[0])
+    assert data["stride"] >= 2 and len(page) < 20e6
