@@ -354,12 +354,19 @@ def _one_run(args) -> int:
 
 
 def _write(args, df, base: pathlib.Path) -> None:
-    viewers = None if args.no_viewers else viewer_links.write_viewers(df, base, args.out)
+    planned = {} if args.no_viewers else viewer_links.plan(df, base, args.out)
     try:
-        page = build_html(df, base, args.title or f"sumo-avoid study: {args.source}", args.run, viewers)
+        page = build_html(df, base, args.title or f"sumo-avoid study: {args.source}", args.run,
+                          None if args.no_viewers else viewer_links.links(planned, args.out))
     except ValueError as e:
         raise ScenarioError(CL, "--run", f"the key (or a key prefix) of a done run ({e})", args.run) from None
     write_atomic(args.out, page)
+    try:  # after the page: a folder that vanished or a full disk is named on the page's file first
+        viewer_links.write_planned(planned)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            args.out.unlink()
+        raise
     print(f"report -> {args.out} ({len(df)} runs)")
     if args.md:
         s = summary(df)

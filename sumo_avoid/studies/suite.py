@@ -312,17 +312,17 @@ def with_viewers(results: list[EntryResult], runs_by_entry, led: pathlib.Path, j
     """Each failed entry's runs get their viewer page beside the JUnit XML (``JUNIT_viewers/ENTRY-sSEED.html``),
     written while the runs' folders exist (a suite's own ledger is temporary), named in its failure."""
     df = ledger.read(led)
-    out = []
+    done = df[df["status"] == "done"].sort_values("seed")
+    planned, found = {}, {}
     for r in results:
-        found = []
-        keys = {s.key for s in runs_by_entry[r.entry.name]}
-        rows = df[df["key"].isin(keys) & (df["status"] == "done")].sort_values("seed").to_dict(orient="records")
-        for row in rows if not r.passed else []:
-            folder = viewer_links.viewers_dir(junit)
-            folder.mkdir(exist_ok=True)
-            name = re.sub(r"[^A-Za-z0-9_.-]+", "_", r.entry.name)
-            path = viewer_links.viewer_for(row, led.resolve().parent, folder / f"{name}-s{row['seed']}.html")
-            if path is not None:
-                found.append((int(row["seed"]), str(row["key"]), str(path)))
-        out.append(dataclasses.replace(r, viewers=tuple(found)))
-    return out
+        if r.passed:
+            continue
+        name = re.sub(r"[^A-Za-z0-9_.-]+", "_", r.entry.name)
+        rows = done[done["key"].isin({s.key for s in runs_by_entry[r.entry.name]})]
+        for key, (d, net, _) in viewer_links.plan(rows, led.resolve().parent, junit).items():
+            seed = int(rows.loc[rows["key"] == key, "seed"].iloc[0])
+            path = viewer_links.viewers_dir(junit) / f"{name}-s{seed}.html"
+            planned[(r.entry.name, key)] = (d, net, path)
+            found.setdefault(r.entry.name, []).append((seed, str(key), str(path)))
+    viewer_links.write_planned(planned)
+    return [dataclasses.replace(r, viewers=tuple(found.get(r.entry.name, ()))) for r in results]

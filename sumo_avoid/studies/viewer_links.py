@@ -1,6 +1,10 @@
 """The run viewers a study report links (``report LEDGER --out R.html``: one page per done run in
 ``R_viewers/KEY.html`` beside the report) and a suite's JUnit XML names (``JUNIT_viewers/ENTRY-sSEED.html``
-beside it, for the runs of a failed entry)."""
+beside it, for the runs of a failed entry).
+
+A report plans its viewers (:func:`plan`), writes its page with their links, then the viewers
+(:func:`write_planned`); if one cannot be written, the page and the viewers written so far are
+removed again (nothing half-written) and the error names the file."""
 from __future__ import annotations
 
 import contextlib
@@ -9,6 +13,7 @@ import os
 import pathlib
 
 from sumo_avoid.core.config import ScenarioError
+from sumo_avoid.studies.files import write_atomic
 from sumo_avoid.studies.watch_cmd import write_viewer
 
 
@@ -25,32 +30,49 @@ def _artifacts(row, base: pathlib.Path) -> pathlib.Path | None:
     return p if (p / "trajectories.csv").is_file() else None
 
 
-def viewer_for(row, base: pathlib.Path, out: pathlib.Path) -> pathlib.Path | None:
-    """Write the viewer of one ledger row's run to ``out``; None where its recording is gone or unreadable."""
-    d = _artifacts(row, base)
-    if d is None:
-        return None
-    net = row.get("net_file") if isinstance(row.get("net_file"), str) else None
-    try:
-        return write_viewer(d, out, net_file=net)
-    except ScenarioError:  # a run folder that lost its files: no viewer, the report says so
-        return None
+def _net(row) -> str | None:
+    return row.get("net_file") if isinstance(row.get("net_file"), str) else None
 
 
-def write_viewers(df, base: pathlib.Path, report: pathlib.Path) -> dict:
-    """key -> link (relative to the report) of each done run's viewer."""
+def plan(df, base: pathlib.Path, report: pathlib.Path) -> dict:
+    """key -> (run folder, net file or None, viewer file) of each done run with a recording."""
     folder = viewers_dir(report)
-    links = {}
+    out = {}
     for row in df[df["status"] == "done"].to_dict(orient="records"):
-        if _artifacts(row, base) is None:
-            continue
-        folder.mkdir(exist_ok=True)
-        path = viewer_for(row, base, folder / f"{str(row['key'])[:16]}.html")
-        if path is not None:
-            links[row["key"]] = os.path.relpath(path, report.parent)
-    with contextlib.suppress(OSError):
-        folder.rmdir()  # only if nothing was written
-    return links
+        d = _artifacts(row, base)
+        if d is not None:
+            out[row["key"]] = (d, _net(row), folder / f"{str(row['key'])[:16]}.html")
+    return out
+
+
+def links(planned: dict, report: pathlib.Path) -> dict:
+    """key -> link of its viewer, relative to the report."""
+    return {k: os.path.relpath(path, report.parent) for k, (_, _, path) in planned.items()}
+
+
+def write_planned(planned: dict) -> None:
+    """Write every planned viewer (a run whose files no longer read gets a page saying why); on failure
+    remove what was written and raise."""
+    written: list[pathlib.Path] = []
+    folders = sorted({path.parent for _, _, path in planned.values()})
+    made = [f for f in folders if not f.exists()]
+    try:
+        for f in made:
+            f.mkdir()
+        for d, net, path in planned.values():
+            try:
+                write_viewer(d, path, net_file=net)
+            except ScenarioError as e:
+                write_atomic(path, f"<!DOCTYPE html><meta charset='utf-8'><p>No viewer: {html.escape(str(e))}</p>\n")
+            written.append(path)
+    except BaseException:
+        for path in written:
+            with contextlib.suppress(OSError):
+                path.unlink()
+        for f in made:
+            with contextlib.suppress(OSError):
+                f.rmdir()
+        raise
 
 
 def link(href: str | None) -> str:

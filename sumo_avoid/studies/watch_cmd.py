@@ -12,6 +12,7 @@ import pathlib
 import sys
 import tempfile
 
+import traci  # the exceptions of sumo-gui's remote control
 from sumo_avoid.core.config import ScenarioError
 from sumo_avoid.studies.files import CL, check_out_file, make_dirs, remove_dirs, write_atomic
 from sumo_avoid.watch import recording
@@ -77,6 +78,11 @@ def cmd_replay(args) -> int:
         with tempfile.TemporaryDirectory(prefix="sumo-avoid-replay-") as tmp:
             out = replay(rec, ReplaySpec(args.t_from, args.t_to, args.speed, args.screenshot, args.at),
                          pathlib.Path(tmp))
+    except (traci.exceptions.FatalTraCIError, traci.exceptions.TraCIException) as e:
+        remove_dirs(made)
+        print(f"sumo-avoid: error: {args.run_dir}: sumo-gui ended the replay early (its window closed, or it "
+              f"stopped: its messages above): {e}", file=sys.stderr)
+        return 1
     except BaseException:
         remove_dirs(made)
         raise

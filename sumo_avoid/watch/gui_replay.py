@@ -10,14 +10,18 @@ road user and the exact steps, so the replay places each where it was without re
 file, needs no extra output during the run, and keeps persons, egos driven off their lanes and
 signal states; libsumo has no GUI, so sumo-gui runs in its own process, driven over TraCI.
 
-``--screenshot FILE --at S`` saves the view at time S (with the view's bounds beside it,
+The window stays open on the last step until it is closed (the command returns then);
+``--screenshot FILE --at S`` closes it at the end and saves the view at time S (with the view's bounds beside it,
 ``FILE.json``: x0, y0, x1, y1 in net metres, so a pixel maps to a net position)."""
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import io
 import json
 import math
 import pathlib
+import subprocess
 import time
 
 import numpy as np
@@ -64,11 +68,12 @@ def _edge(lane) -> str:
     return str(lane).rsplit("_", 1)[0] if isinstance(lane, str) and lane else ""
 
 
-def _command(rec: Recording, begin_s: float, spec: ReplaySpec, settings: pathlib.Path) -> list[str]:
+def _command(rec: Recording, begin_s: float, settings: pathlib.Path, quit_at_end: bool) -> list[str]:
+    """sumo-gui's command line; without ``quit_at_end`` its window stays open on the last step until closed."""
     return [sumo_gui(), "-n", str(rec.net_file), "--step-length", str(rec.step_s), "--begin", f"{begin_s:.6f}",
-            "--start", "--quit-on-end", "--no-step-log", "--no-warnings", "--collision.action", "none",
-            "--time-to-teleport", "-1", "--gui-settings-file", str(settings), "--window-size", "1100,760",
-            "--error-log", str(settings.with_name("sumo-gui.log"))]
+            "--start", *(["--quit-on-end"] if quit_at_end else []), "--no-step-log", "--no-warnings",
+            "--collision.action", "none",
+            "--time-to-teleport", "-1", "--gui-settings-file", str(settings), "--window-size", "1100,760"]
 
 
 def replay(rec: Recording, spec: ReplaySpec, work: pathlib.Path) -> dict:
@@ -84,7 +89,8 @@ def replay(rec: Recording, spec: ReplaySpec, work: pathlib.Path) -> dict:
     settings = work / "replay.settings.xml"
     settings.write_text(SETTINGS.format(delay=delay_ms))
     label = f"replay-{id(rec)}"
-    traci.start(_command(rec, t0 - rec.step_s, spec, settings), label=label)
+    with contextlib.redirect_stdout(io.StringIO()):  # TraCI prints "Retrying in 1 seconds" while sumo-gui starts
+        traci.start(_command(rec, t0 - rec.step_s, settings, spec.screenshot is not None), label=label, stdout=subprocess.DEVNULL)
     con = traci.getConnection(label)
     out = {"steps": 0, "screenshot": None, "bounds": None}
     try:

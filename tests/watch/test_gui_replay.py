@@ -11,7 +11,7 @@ import sys
 import imageio.v2 as imageio
 import numpy as np
 import pytest
-from conftest import run_dir, tool
+from watch_runs import crash_run, run_dir, tool  # noqa: F401  (crash_run: a fixture)
 
 from sumo_avoid.watch import recording
 from sumo_avoid.watch.recording import at_time

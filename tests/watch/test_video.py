@@ -6,6 +6,7 @@ from __future__ import annotations
 import imageio.v2 as imageio
 import numpy as np
 import pytest
+from watch_runs import crash_run  # noqa: F401  (a fixture)
 
 from sumo_avoid.cli import main
 from sumo_avoid.watch import recording

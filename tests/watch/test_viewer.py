@@ -8,7 +8,7 @@ import re
 import subprocess
 
 import pytest
-from conftest import tool
+from watch_runs import crash_run, tool  # noqa: F401  (crash_run: a fixture)
 
 from sumo_avoid.cli import main
 from sumo_avoid.watch import recording

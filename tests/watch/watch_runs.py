@@ -1,5 +1,6 @@
 """Real runs to watch: crash_straight (the ego drives blind into a parked car at 5.7 s), made once
-per test process with ``sumo-avoid run``; and the tools that open them (Debian's chromium, Xvfb)."""
+per test process with ``sumo-avoid run`` (the fixture ``crash_run``: import it into a test module);
+and the tools that open them (Debian's chromium, Xvfb)."""
 from __future__ import annotations
 
 import pathlib
@@ -19,9 +20,15 @@ def run_dir(factory, name: str, *extra: str) -> pathlib.Path:
     return out
 
 
-@pytest.fixture(scope="session")
+_MADE: dict = {}
+
+
+@pytest.fixture()
 def crash_run(tmp_path_factory) -> pathlib.Path:
-    return run_dir(tmp_path_factory, "crash_straight")
+    """The crash_straight run, made once per test process and shared by the test modules importing this."""
+    if "crash" not in _MADE:
+        _MADE["crash"] = run_dir(tmp_path_factory, "crash_straight")
+    return _MADE["crash"]
 
 
 def tool(*names: str, why: str) -> str:
