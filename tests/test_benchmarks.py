@@ -95,3 +95,11 @@ def test_suite_time_reads_pytests_line_and_refuses_what_is_not_a_commit(capsys, 
     assert suite_time.main(["HEAD", "HEAD", "--repo", str(tmp_path)]) == 2  # a folder that is no repository
     err = capsys.readouterr().err
     assert err.count("\n") == 3 and "'no-such-commit' is not a commit" in err and "is not a git repository" in err
+
+
+def test_replay_record_benchmark_prints_its_share():
+    out = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "replay_record.py"), "--scenario", "crash_straight",
+                          "--repeat", "2"], capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    assert re.fullmatch(r"max_share=\d\.\d{5}", out.stdout.strip().splitlines()[-1])
+    assert "crash_straight: run " in out.stdout
