@@ -26,8 +26,9 @@ from sumo_avoid.runs.job import RunJob, RunOutcome
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.key_reference import format_reference
 from sumo_avoid.scenario.plugins import choose
-from sumo_avoid.studies import batch, files, report, reproduce, suite, tune
+from sumo_avoid.studies import batch, files, report, reproduce, suite, tune, watch_cmd
 from sumo_avoid.sumo import console
+from sumo_avoid.watch.video import VideoSpec
 
 EXIT_BAD_INPUT = 2
 EXIT_CRASHED = 3
@@ -59,12 +60,14 @@ def _parser() -> argparse.ArgumentParser:
                    help="override a scenario value by its dotted path, e.g. --set sim.duration_s=60")
     r.add_argument("--out", type=pathlib.Path, default=None, help="output folder (default: reports/runs/NAME-...)")
     r.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
+    r.add_argument("--video", type=pathlib.Path, default=None, metavar="FILE",
+                   help="also render the run into FILE.mp4 or FILE.gif (headless; as replay --video)")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     c = sub.add_parser("controllers", help="list the controllers: built in, of installed packages (entry points) "
                                            "and those named (MODULE:ATTR), each with its origin")
     c.add_argument("names", nargs="*", metavar="NAME", help="controllers to look up (a name or MODULE:ATTR)")
     sub.add_parser("keys", help="print every scenario key (Markdown table)")
-    for mod in (batch, suite, report, reproduce, tune):
+    for mod in (batch, suite, report, reproduce, tune, watch_cmd):
         mod.add_parser(sub)
     return ap
 
@@ -96,6 +99,8 @@ def cmd_run(args) -> int:
     if out is None:
         stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
         out = pathlib.Path("reports") / "runs" / f"{scn.name}-{scn.spec.ego.controller}-s{scn.spec.sim.seed}-{stamp}"
+    if args.video is not None:
+        watch_cmd.check_video_path(args.video, "--video")
     made = files.make_dirs(out, "--out")  # refused now, not after the run
     kept: list[pathlib.Path] = []
     try:
@@ -128,6 +133,8 @@ def cmd_run(args) -> int:
         return EXIT_CRASHED
     print(_summary(res.metrics, out))
     print(f"  {console.summary_line(out / 'sumo.log')}")
+    if args.video is not None:
+        return watch_cmd.render(out, args.video, VideoSpec())
     return 0
 
 
@@ -197,7 +204,7 @@ def main(argv=None) -> int:
     try:
         if args.command == "run":
             return cmd_run(args)
-        if getattr(args, "func", None) is not None:  # batch, suite, report, reproduce, tune
+        if getattr(args, "func", None) is not None:  # batch, suite, report, reproduce, tune, replay
             return args.func(args)
         if args.command == "controllers":
             return cmd_controllers(args)

@@ -68,6 +68,7 @@ ORDER = (
     ("plots",),
     ("scenario",),
     ("runs",),  # one run: runner, outputs, child processes
+    ("watch",),  # a finished run read back: viewer page, video, sumo-gui replay
     ("studies", "gym"),  # gym: environments stepping a run (optional extra [gym])
     ("cli",),
 )

@@ -154,3 +154,11 @@ def test_same_behaviour_compare_within_a_relative_tolerance(tmp_path, capsys):
     assert any(line.startswith("DIFFERS runs/x-s1/trajectories.csv") and "id (inf)" in line for line in out)
     with pytest.raises(SystemExit):
         sb.main(["compare", str(base), str(new), "--tolerance", "-1"])
+
+
+def test_replay_record_benchmark_prints_its_share():
+    out = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "replay_record.py"), "--scenario", "crash_straight",
+                          "--repeat", "2"], capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    assert re.fullmatch(r"max_share=\d\.\d{5}", out.stdout.strip().splitlines()[-1])
+    assert "crash_straight: run " in out.stdout

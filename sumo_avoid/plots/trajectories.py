@@ -30,7 +30,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from sumo_avoid.road.network import Road
 
-__all__ = ["footprint_corners", "plot_timeseries", "plot_trajectories", "track_xy"]
+__all__ = ["draw_road", "footprint_corners", "plot_timeseries", "plot_trajectories", "track_xy"]
 
 ROAD_FILL = "#a9a9a9"
 OFFROAD_FILL = "#eef1ea"
@@ -201,26 +201,7 @@ def plot_trajectories(road: "Road", traj: "pd.DataFrame", out_png, *, collisions
 def _draw(ax, road, groups, ego_ids, other_ids, obstacles, goals, coll, labels: bool = True, persons=None) -> list:
     """Everything of a trajectory figure on one axes (the main view, or the close-up); returns the
     legend handles."""
-    ax.set_facecolor(OFFROAD_FILL)
-
-    patch = _area_patch(road.area, facecolor=ROAD_FILL, edgecolor="#6b6b6b", linewidth=0.8, zorder=0)
-    if patch is not None:
-        ax.add_patch(patch)
-    for line in road.lane_lines("dashed"):
-        ax.plot(line[:, 0], line[:, 1], color=MARKING, lw=0.8, ls=(0, (6, 6)), zorder=1)
-    for line in road.lane_lines("edge"):
-        ax.plot(line[:, 0], line[:, 1], color=MARKING, lw=1.2, zorder=1)
-    any_median = False
-    for line in road.lane_lines("median"):  # on a one-way road this is the left edge: keep it white
-        edge = _on_boundary(road, line)
-        any_median |= not edge
-        ax.plot(line[:, 0], line[:, 1], color=MARKING if edge else MEDIAN, lw=1.4, zorder=1)
-
-    handles = [Line2D([], [], color=ROAD_FILL, lw=6, label="drivable area"),
-               Line2D([], [], color="#808080", lw=1, ls="--", label="lane line")]
-    if any_median:
-        handles.append(Line2D([], [], color=MEDIAN, lw=1.5, label="solid (no crossing)"))
-    handles += draw_street(ax, road) + draw_persons(ax, persons)
+    handles = draw_road(ax, road) + draw_persons(ax, persons)
 
     for ob in obstacles:
         ax.add_patch(MplPolygon(ob, closed=True, facecolor="#222222", edgecolor="black", zorder=3))
@@ -273,6 +254,32 @@ def _draw(ax, road, groups, ego_ids, other_ids, obstacles, goals, coll, labels: 
                               label=f"collision ({len(coll)})"))
 
     return handles
+
+
+
+def draw_road(ax, road) -> list:
+    """The road on ``ax``: drivable area, lane lines, medians, sidewalks, special lanes and crossings;
+    returns the legend handles (also the run video's background, :mod:`sumo_avoid.watch.video`)."""
+    ax.set_facecolor(OFFROAD_FILL)
+
+    patch = _area_patch(road.area, facecolor=ROAD_FILL, edgecolor="#6b6b6b", linewidth=0.8, zorder=0)
+    if patch is not None:
+        ax.add_patch(patch)
+    for line in road.lane_lines("dashed"):
+        ax.plot(line[:, 0], line[:, 1], color=MARKING, lw=0.8, ls=(0, (6, 6)), zorder=1)
+    for line in road.lane_lines("edge"):
+        ax.plot(line[:, 0], line[:, 1], color=MARKING, lw=1.2, zorder=1)
+    any_median = False
+    for line in road.lane_lines("median"):  # on a one-way road this is the left edge: keep it white
+        edge = _on_boundary(road, line)
+        any_median |= not edge
+        ax.plot(line[:, 0], line[:, 1], color=MARKING if edge else MEDIAN, lw=1.4, zorder=1)
+
+    handles = [Line2D([], [], color=ROAD_FILL, lw=6, label="drivable area"),
+               Line2D([], [], color="#808080", lw=1, ls="--", label="lane line")]
+    if any_median:
+        handles.append(Line2D([], [], color=MEDIAN, lw=1.5, label="solid (no crossing)"))
+    return handles + draw_street(ax, road)
 
 
 def track_xy(g) -> tuple[np.ndarray, np.ndarray]:

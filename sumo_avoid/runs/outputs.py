@@ -1,5 +1,8 @@
 """The files of one finished run: metrics.json, timings.json, trajectories.csv, persons.csv (when
-the run had persons outside vehicles; the same columns), the plug-ins' tables (e.g. detections.csv) and the plots (:func:`sumo_avoid.runs.declared.plot_names`).
+the run had persons outside vehicles; the same columns), the plug-ins' tables (e.g. detections.csv), the plots
+(:func:`sumo_avoid.runs.declared.plot_names`), and what watching the run needs besides them (``sumo-avoid
+replay``, ``report RUN_DIR``): ``replay.json`` (its net file, step, egos, goals and road users' SUMO classes)
+and ``signals.csv`` (the traffic lights' recorded states, a row per change; runs with signals).
 
 ``metrics.json`` holds only simulation results (no wall-clock fields), written with sorted keys,
 so the same scenario and seed give a byte-identical file. Timings go to ``timings.json``.
@@ -45,6 +48,7 @@ def write_outputs(res: RunResult, out_dir: pathlib.Path, plots: bool = True) -> 
     for name, table in {**tables, **res.tables}.items():
         with writing(out_dir / f"{name}.csv"):
             table.to_csv(out_dir / f"{name}.csv", index=False)
+    write_replay_files(res, out_dir)
     if plots:
         title = (f"{m['scenario']} · {m['controller']} · seed {m['seed']} · collisions {m['collisions']}"
                  f" · goal {'reached' if m['goal_reached'] else 'NOT reached'}")
@@ -52,3 +56,22 @@ def write_outputs(res: RunResult, out_dir: pathlib.Path, plots: bool = True) -> 
             with writing(out_dir):
                 PLOTS[name].factory(res, m, out_dir, title)
     return m
+
+
+def replay_info(res: RunResult) -> dict:
+    """What a replay needs that the tables do not hold: the net, the step, the egos, their goals, the classes."""
+    scn = res.scenario
+    return {"net_file": str(pathlib.Path(scn.net_file).resolve()) if getattr(scn, "net_file", None) else None,
+            "scenario_file": str(pathlib.Path(scn.path).resolve()), "step_s": scn.spec.sim.step_s,
+            "egos": sorted(res.goals) or sorted(res.traj.loc[res.traj["is_ego"].astype(bool), "id"].unique()),
+            "goals": {k: [float(v) for v in xy] for k, xy in sorted(res.goals.items())},
+            "classes": dict(sorted(res.classes.items()))}
+
+
+def write_replay_files(res: RunResult, out_dir: pathlib.Path) -> None:
+    """``replay.json`` and (with signals) ``signals.csv``: new files only, the others stay byte for byte."""
+    with writing(out_dir / "replay.json"):
+        (out_dir / "replay.json").write_text(json.dumps(replay_info(res), indent=1, sort_keys=True) + "\n")
+    if res.signals is not None and len(res.signals):
+        with writing(out_dir / "signals.csv"):
+            res.signals.to_csv(out_dir / "signals.csv", index=False)

@@ -5,7 +5,10 @@ inline, there are no scripts and no links to fetch. Sections: a table per scenar
 every dimension the batch varied (:func:`varied`: --set and grid keys whose value differs between
 runs), a trajectory plot on the road geometry per such group, box plots of each metric across
 seeds, time series of gap and speed for one chosen run, every run, and the failed runs with their errors.
-``--md`` / ``--csv`` export the summary table as Markdown and the runs table as CSV.
+``--md`` / ``--csv`` export the summary table as Markdown and the runs table as CSV. Each done run's
+viewer (:mod:`sumo_avoid.watch.viewer`) is written to ``REPORT_viewers/KEY.html`` and linked from the
+runs table (``--no-viewers``: not); ``report RUN_DIR`` of one run folder writes that run's viewer
+(``--out``, default ``RUN_DIR/viewer.html``).
 
 The input is a ledger (``.sqlite``), a folder holding ``ledger.sqlite``, or a folder of run
 folders written by ``sumo-avoid run`` (each with ``metrics.json``), or one such run folder.
@@ -31,8 +34,9 @@ from sumo_avoid.plots.trajectories import (
     plot_timeseries,
     plot_trajectories,
 )
-from sumo_avoid.studies import baseline, ledger
+from sumo_avoid.studies import baseline, ledger, viewer_links
 from sumo_avoid.studies.files import CL, check_out_file, make_dirs, remove_dirs, write_atomic
+from sumo_avoid.studies.watch_cmd import write_viewer
 from sumo_avoid.road.network import Road
 
 METRICS = ("collisions", "min_gap_m", "phi_coll", "phi_wall", "mean_speed_mps", "time_to_goal_s",
@@ -237,9 +241,10 @@ def _fmt(v) -> str:
     return str(v)
 
 
-def _table_html(df, cols) -> str:
+def _table_html(df, cols, raw=()) -> str:
+    """``raw``: columns holding HTML already (the viewer links)."""
     head = "".join(f"<th>{html.escape(c)}</th>" for c in cols)
-    body = "".join("<tr>" + "".join(f"<td>{html.escape(_fmt(r[c]))}</td>" for c in cols) + "</tr>"
+    body = "".join("<tr>" + "".join(f"<td>{r[c] if c in raw else html.escape(_fmt(r[c]))}</td>" for c in cols) + "</tr>"
                    for r in df.to_dict(orient="records"))
     return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
 
@@ -255,7 +260,8 @@ CSS = ("body{font-family:sans-serif;margin:2em;max-width:1400px}table{border-col
        "img{max-width:100%;border:1px solid #ddd;margin:.5em 0}.failed td{background:#fde}")
 
 
-def build_html(df, base: pathlib.Path, title: str, run_key: str | None = None) -> str:
+def build_html(df, base: pathlib.Path, title: str, run_key: str | None = None, viewers: dict | None = None) -> str:
+    """``viewers``: run key -> link of its viewer page (a column of the runs table)."""
     df, group = varied(df)
     summ = summary(df)
     done = df[df["status"] == "done"].sort_values(["scenario", "controller", "seed", "key"])
@@ -284,8 +290,12 @@ def build_html(df, base: pathlib.Path, title: str, run_key: str | None = None) -
                      f"{html.escape(str(row['controller']))} · seed {row['seed']} ({html.escape(str(row['key'])[:16])})</h2>"
                      + (_img(b64, "time series") if b64 else "<p>(no trajectory recorded)</p>"))
     cols = ["key", *group, "seed", "status"] + [c for c in ("goal_reached", *METRICS, *DERIVED) if c in df]
-    shown = df.sort_values(["scenario", "controller", "seed", "key"]).assign(key=lambda x: x["key"].astype(str).str[:16])
-    parts.append(f'<h2>Runs</h2><div id="runs">{_table_html(shown, cols)}</div>')
+    shown = df.sort_values(["scenario", "controller", "seed", "key"])
+    if viewers is not None:
+        cols.insert(1, "viewer")
+        shown = shown.assign(viewer=[viewer_links.link(viewers.get(k)) for k in shown["key"]])
+    shown = shown.assign(key=lambda x: x["key"].astype(str).str[:16])
+    parts.append(f'<h2>Runs</h2><div id="runs">{_table_html(shown, cols, raw=("viewer",))}</div>')
     parts.append("<h2>Failed runs</h2>" + (f'<div id="failed" class="failed">'
                                           f'{_table_html(failed, ["key", "scenario", "controller", "seed", "error"])}</div>'
                                           if len(failed) else "<p>none</p>"))
@@ -296,7 +306,9 @@ def build_html(df, base: pathlib.Path, title: str, run_key: str | None = None) -
 def add_parser(sub) -> None:
     r = sub.add_parser("report", help="self-contained HTML report of a ledger or of run folders")
     r.add_argument("source", type=pathlib.Path, metavar="LEDGER_OR_RUN_DIR")
-    r.add_argument("--out", type=pathlib.Path, required=True, help="HTML file to write")
+    r.add_argument("--out", type=pathlib.Path, default=None,
+                   help="HTML file to write (one run folder: its viewer, default RUN_DIR/viewer.html)")
+    r.add_argument("--no-viewers", action="store_true", help="no viewer page per run beside the report")
     r.add_argument("--run", default=None, metavar="KEY", help="run (key prefix) for the time series (default: first)")
     r.add_argument("--md", type=pathlib.Path, default=None, help="also write the summary table as Markdown")
     r.add_argument("--csv", type=pathlib.Path, default=None, help="also write the runs table as CSV")
@@ -305,6 +317,11 @@ def add_parser(sub) -> None:
 
 
 def cmd_report(args) -> int:
+    if (args.source / "metrics.json").is_file():  # one run folder: its viewer
+        return _one_run(args)
+    if args.out is None:
+        raise ScenarioError(CL, "--out", "an HTML file to write (needed for a ledger or a folder of runs)",
+                            show_got=False)
     for flag, path in (("--out", args.out), ("--md", args.md), ("--csv", args.csv)):
         if path is not None:
             check_out_file(path, flag)  # before the (slow) report is built
@@ -319,12 +336,37 @@ def cmd_report(args) -> int:
     return 0
 
 
-def _write(args, df, base: pathlib.Path) -> None:
+def _one_run(args) -> int:
+    """``report RUN_DIR``: the run's viewer page (:mod:`sumo_avoid.watch.viewer`)."""
+    for flag, path in (("--md", args.md), ("--csv", args.csv), ("--run", args.run)):
+        if path is not None:
+            raise ScenarioError(CL, flag, "no table for one run folder (its viewer has its metrics)", str(path))
+    out = args.out or args.source / "viewer.html"
+    check_out_file(out, "--out")
+    made = make_dirs(out.parent, "--out")
     try:
-        page = build_html(df, base, args.title or f"sumo-avoid study: {args.source}", args.run)
+        write_viewer(args.source, out)
+    except BaseException:
+        remove_dirs(made)
+        raise
+    print(f"viewer -> {out}")
+    return 0
+
+
+def _write(args, df, base: pathlib.Path) -> None:
+    planned = {} if args.no_viewers else viewer_links.plan(df, base, args.out)
+    try:
+        page = build_html(df, base, args.title or f"sumo-avoid study: {args.source}", args.run,
+                          None if args.no_viewers else viewer_links.links(planned, args.out))
     except ValueError as e:
         raise ScenarioError(CL, "--run", f"the key (or a key prefix) of a done run ({e})", args.run) from None
     write_atomic(args.out, page)
+    try:  # after the page: a folder that vanished or a full disk is named on the page's file first
+        viewer_links.write_planned(planned)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            args.out.unlink()
+        raise
     print(f"report -> {args.out} ({len(df)} runs)")
     if args.md:
         s = summary(df)

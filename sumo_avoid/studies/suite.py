@@ -19,6 +19,9 @@ the same scenario and seed) may be named like a metric, e.g. ``travel_time_ratio
 suite then runs the entry's baseline too (controller ``sumo``, same scenario, seeds and overrides)
 unless it is a run of the suite already. A seed without a ratio (either did not reach its goal)
 fails a per-seed criterion and makes an aggregate n/a.
+
+With ``--junit FILE``, each run of a failed entry gets its viewer page (:mod:`sumo_avoid.watch.viewer`) in
+``FILE_viewers/ENTRY-sSEED.html``, and the entry's ``<failure>`` names the runs and those files.
 """
 from __future__ import annotations
 
@@ -37,7 +40,7 @@ from sumo_avoid.core.types import Keys
 from sumo_avoid.runs.declared import metric_keys
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.scenario.spec import read_toml
-from sumo_avoid.studies import baseline, batch, ledger
+from sumo_avoid.studies import baseline, batch, ledger, viewer_links
 from sumo_avoid.studies.batch import parse_seeds
 from sumo_avoid.studies.files import SuiteFile, check_out_file, make_dirs, remove_dirs, write_atomic
 
@@ -180,6 +183,7 @@ class EntryResult:
     passed: bool
     lines: tuple[tuple[str, bool, str], ...]  # (criterion or "runs", passed, observation)
     time_s: float
+    viewers: tuple[tuple[int, str, str], ...] = ()  # a failed entry's runs: (seed, run key, viewer file)
 
 
 def evaluate(entries: list[Entry], runs_by_entry: dict[str, list], df) -> list[EntryResult]:
@@ -227,8 +231,10 @@ def junit_xml(results: list[EntryResult], suite_name: str) -> str:
                            time=f"{r.time_s:.3f}")
         bad = [(t, o) for t, ok, o in r.lines if not ok]
         if bad:
-            f = ET.SubElement(tc, "failure", message=f"{r.entry.name}: {bad[0][0]}: {bad[0][1]}", type="criterion")
-            f.text = "\n".join(f"{t}: {o}" for t, o in bad)
+            runs = [f"run {k[:16]} (seed {seed}): viewer {path}" for seed, k, path in r.viewers]
+            f = ET.SubElement(tc, "failure", message=f"{r.entry.name}: {bad[0][0]}: {bad[0][1]}"
+                              + (f"; {runs[0]}" if runs else ""), type="criterion")
+            f.text = "\n".join([f"{t}: {o}" for t, o in bad] + runs)
         ET.SubElement(tc, "system-out").text = "\n".join(f"{'pass' if ok else 'FAIL'} {t}: {o}"
                                                         for t, ok, o in r.lines)
     ET.indent(root)
@@ -298,4 +304,25 @@ def _run(args, entries, runs_by_entry, all_runs, workers, n_baselines: int = 0) 
         extra = f" ({n_baselines} of them baselines for travel_time_ratio, controller {baseline.BASELINE})" if n_baselines else ""
         print(f"suite {args.suite}: {len(entries)} entries, {len(all_runs)} runs{extra}", flush=True)
         batch.run_batch(cfg, progress=False if args.quiet else None)
-        return evaluate(entries, runs_by_entry, ledger.read(led))
+        results = evaluate(entries, runs_by_entry, ledger.read(led))
+        return with_viewers(results, runs_by_entry, led, args.junit) if args.junit else results
+
+
+def with_viewers(results: list[EntryResult], runs_by_entry, led: pathlib.Path, junit: pathlib.Path) -> list:
+    """Each failed entry's runs get their viewer page beside the JUnit XML (``JUNIT_viewers/ENTRY-sSEED.html``),
+    written while the runs' folders exist (a suite's own ledger is temporary), named in its failure."""
+    df = ledger.read(led)
+    done = df[df["status"] == "done"].sort_values("seed")
+    planned, found = {}, {}
+    for r in results:
+        if r.passed:
+            continue
+        name = re.sub(r"[^A-Za-z0-9_.-]+", "_", r.entry.name)
+        rows = done[done["key"].isin({s.key for s in runs_by_entry[r.entry.name]})]
+        for key, (d, net, _) in viewer_links.plan(rows, led.resolve().parent, junit).items():
+            seed = int(rows.loc[rows["key"] == key, "seed"].iloc[0])
+            path = viewer_links.viewers_dir(junit) / f"{name}-s{seed}.html"
+            planned[(r.entry.name, key)] = (d, net, path)
+            found.setdefault(r.entry.name, []).append((seed, str(key), str(path)))
+    viewer_links.write_planned(planned)
+    return [dataclasses.replace(r, viewers=tuple(found.get(r.entry.name, ()))) for r in results]

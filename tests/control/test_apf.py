@@ -99,23 +99,25 @@ def test_a_field_that_pushes_back_reverses_a_standing_car_only_where_it_may():
     assert forward[0] > 0.0 and forward[1] == 0.0
 
 
-@pytest.mark.parametrize("beside_m", [-1.8, 1.8])
-def test_what_is_nearest_to_the_rear_half_does_not_steer_the_ego(beside_m):
+@pytest.mark.parametrize("beside_m, o_speed", [(-1.8, 0.0), (1.8, 0.0), (-1.8, 6.0)])
+def test_what_is_nearest_to_the_rear_half_does_not_steer_the_ego(beside_m, o_speed):
     # a car moves sideways only by turning about its centre, which swings its rear half the other way:
     # a person standing 0.2 m beside the rear half pushes it across the road not at all (signal_crossing_right,
     # radar, seeds 3 and 6: pushed away, the ego turned its rear corner into a person standing at the corner);
-    # beside the front half it pushes the ego away (left)
+    # beside the front half it pushes the ego away (left); so does one beside the rear half that comes up from
+    # behind faster than the ego (6 m/s against 3: generated suite rand05 seed 3, a car overtaking on the right
+    # touched the rear corner of an ego that no longer moved away from it)
     from sumo_avoid.control.road_view import FrenetScene
 
     def scene(o_pos):
         return FrenetScene(100.0, 0.0, 0.0, np.array([3.0, 0.0]), 4.8, 1.8, np.array(o_pos, float).reshape(-1, 2),
                            np.zeros(len(o_pos)), np.full(len(o_pos), 0.6), np.full(len(o_pos), 0.6),
-                           np.zeros((len(o_pos), 2)), lambda s: (np.full(len(s), -6.0), np.full(len(s), 6.0)))
+                           np.tile([o_speed, 0.0], (len(o_pos), 1)), lambda s: (np.full(len(s), -6.0), np.full(len(s), 6.0)))
 
     ctl, target = _driver(), np.array([115.0, 0.0])
     free = ctl.field(scene([]), np.array([[100.0, 0.0]]), target).F[0]
     near = ctl.field(scene([[100.0 + beside_m, -1.4]]), np.array([[100.0, 0.0]]), target).F[0]
-    if beside_m < 0:
+    if beside_m < 0 and o_speed <= 3.0:
         assert near[1] == free[1]
     else:
         assert near[1] > free[1] + 1.0

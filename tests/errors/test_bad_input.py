@@ -379,6 +379,39 @@ CASES.update({
     "report_out_missing_flag": _report(lambda t: _runs_dir(t, _GOOD_RUN), [], ["--out"]),
 })
 
+
+
+def _replay(argv, names, setup=lambda t: t) -> Case:
+    """``sumo-avoid replay SRC ...`` (``{tmp}`` is the folder) after ``setup(tmp)`` made SRC."""
+    def make(tmp):
+        src = setup(tmp)
+        return Call(["replay", src, *[a.replace("{tmp}", str(tmp)) for a in argv]],
+                    tuple(n.replace("{tmp}", str(tmp)) for n in names), cwd=tmp)
+    return Case("replay", make)
+
+
+def _half_run(tmp):  # a run folder without its trajectories
+    d = tmp / "run"
+    d.mkdir()
+    (d / "metrics.json").write_text(_GOOD_RUN)
+    return d
+
+
+CASES.update({
+    "replay_missing_folder": _replay([], ["{tmp}/none", "RUN_DIR"], lambda t: t / "none"),
+    "replay_not_a_run": _replay([], ["run", "trajectories.csv"], _half_run),
+    "replay_video_suffix": _replay(["--video", "{tmp}/v.avi"], ["--video", ".mp4"]),
+    "replay_video_is_folder": _replay(["--video", "{tmp}"], ["--video"]),
+    "replay_video_under_a_file": _replay(["--video", f"{SCN}/v.mp4"], ["--video"]),
+    "replay_from_after_to": _replay(["--from", "5", "--to", "2"], ["--to"]),
+    "replay_speed_zero": _replay(["--speed", "0"], ["--speed"]),
+    "replay_fps_nan": _replay(["--fps", "nan"], ["--fps"]),
+    "replay_screenshot_with_video": _replay(["--video", "{tmp}/v.mp4", "--screenshot", "{tmp}/s.png"],
+                                            ["--screenshot"]),
+    "run_video_suffix": Case("run", lambda t: Call(["run", SCN, "--out", t / "o", "--video", t / "v.avi"], ("--video",))),
+    "report_one_run_md": _report(lambda t: _runs_dir(t, _GOOD_RUN) / "r1", ["--md", "{tmp}/s.md"], ["--md"]),
+})
+
 # cases that fail today, with the cause (strict: a case that starts passing must leave this list)
 XFAIL: dict[str, str] = {}
 

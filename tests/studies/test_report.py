@@ -82,7 +82,10 @@ def test_report_is_self_contained_and_matches_the_ledger(study, tmp_path):
                  "--csv", str(tmp_path / "runs.csv")]) == 0
     page = _Page()
     page.feed(out.read_text())
-    assert page.refs == []  # nothing to fetch
+    # nothing to fetch: the only links are to each done run's viewer page, written beside the report
+    viewers = [r for r in page.refs if r.startswith("r_viewers/")]
+    assert page.refs == viewers and len(viewers) == 4 and all((tmp_path / v).is_file() for v in viewers)
+    assert "window.RUN=" in (tmp_path / viewers[0]).read_text()
     assert len(page.imgs) == 2 + 1 + 1  # a trajectory per scenario x controller, box plots, time series
     for src in page.imgs:
         assert src.startswith("data:image/png;base64,")

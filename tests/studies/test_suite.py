@@ -80,6 +80,10 @@ def test_suite_exit_codes_and_junit(tmp_path, capsys):
     assert cases["overtaking-safe"].find("failure") is None
     failure = cases["overtaking-goal-in-5s"].find("failure")
     assert failure is not None and "goal_reached_rate >= 0.9" in failure.get("message")
+    # one click from the picture: the failure names its runs and their viewer pages beside the XML
+    viewers = sorted((tmp_path / "junit_viewers").glob("overtaking-goal-in-5s-s*.html"))
+    assert len(viewers) == 2 and f"viewer {viewers[0]}" in failure.get("message")
+    assert all(f"viewer {v}" in failure.text for v in viewers) and "window.RUN=" in viewers[0].read_text()
 
     # the passing suite reuses the same runs from the ledger
     rc = main(["suite", str(_suite(tmp_path / "good.toml", False)), "--junit", str(junit), "--ledger", str(led),

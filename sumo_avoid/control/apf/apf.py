@@ -25,8 +25,9 @@ field, and the command is mapped back to the plane. Per ego and step:
   (d, with ``gov_margin_m``; oncoming traffic in its lane, a car in the next lane) is felt from
   ``rho0_beside_m`` plus the lateral stopping distance of its closing speed across the road, and
   pushes only across it (no component along s): the ego can pass it. What is nearest to the ego's
-  rear half (behind its centre) pushes only along the road: the car turns about its centre to move
-  sideways, which swings the rear half towards it.
+  rear half (behind its centre) and is left behind (not faster along the ego's heading) pushes only
+  along the road: the car turns about its centre to move sideways, which swings the rear half
+  towards it; a car coming up from behind still pushes it across.
 * **Velocity**: the ego moves along F (direction F/|F|) at ``min(cruise, |F| * cruise / F_att_max,
   v_safe, v_curve)``: at the potential's minimum it stops; ``v_curve`` is the speed for the road
   ahead (SPEC §5: sqrt(a_lat / |kappa|) within braking distance, RouteFrame.curve_speed_limit). ``v_safe`` is a speed governor: the speed from
@@ -200,9 +201,12 @@ class ApfDriver:
             Ur, Fr = repulsion(rho, away, rho0, p.k_rep)
             Fr[:, 0] = np.where(beside, 0.0, Fr[:, 0])  # ... and pushes only across it, never back
             # a car moves sideways only by turning, and turning swings its rear half the other way:
-            # what is nearest to the rear half pushes it along the road only, never across
+            # what is nearest to the rear half and left behind (not faster along the ego's heading)
+            # pushes it along the road only, never across; one coming up from behind still pushes it
+            # away across the road (at speed the car moves over more than its rear swings)
             rear = ((p_ego - np.repeat(q_cand, O, axis=0)) @ hd) < 0.0
-            Fr[:, 1] = np.where(rear, 0.0, Fr[:, 1])
+            left_behind = (-v_rel) @ hd <= 0.0
+            Fr[:, 1] = np.where(rear & left_behind, 0.0, Fr[:, 1])
             U = U + Ur.reshape(C, O).sum(axis=1)
             F = F + Fr.reshape(C, O, 2).sum(axis=1)
             v_safe = self._governor(q_cand[0], hd, L, W, oc, sc.o_vel, squeeze[:O])
