@@ -6,7 +6,7 @@ Usage::
     python benchmarks/same_behaviour.py record OUT_DIR [--code DIR] [--seeds 1-3] [--workers 2] [--only NAME ...]
 
     # compare two records; exit 0 = same behaviour, 1 = not
-    python benchmarks/same_behaviour.py compare BASE_DIR NEW_DIR [--only NAME ...]
+    python benchmarks/same_behaviour.py compare BASE_DIR NEW_DIR [--only NAME ...] [--tolerance REL]
 
 ``record`` runs, for every single-run scenario ``DIR/scenarios/*.toml`` (a file with a ``[sim]``
 table; ``suite.toml``, a suite of entries, is skipped) and every seed::
@@ -25,6 +25,7 @@ the ``--workers`` slots (its outputs do not depend on it). ``--only NAME`` (repe
 record to scenario NAME (file stem) and/or ``table4``. Jobs run ``--workers`` at a time. Every job's
 stdout/stderr goes to ``OUT_DIR/logs/JOB.log``; ``OUT_DIR/record.json`` holds the code checkout (its
 git commit and whether its tracked files were modified), the imported ``sumo_avoid`` path, the
+numpy and numba versions and the SIMD kernels numpy dispatches on the machine (``build``), the
 environment, and per job the command, exit code and wall time. A job that exits non-zero is an
 error: ``record`` reports it and exits 1 (the record is kept, and ``compare`` counts the job as
 different).
@@ -41,12 +42,19 @@ What counts as "same" (``compare``):
   line with the output path, and wall time) and the figures are not compared.
 * every job of either record must have exit code 0, and both records must hold the same jobs
   (with ``--only``, just the named ones).
+* ``--tolerance REL`` (default 0: byte-identical, as above) is for two records made on different
+  machines or numpy / numba builds, where the same code rounds differently in the last bits (numpy
+  picks its SIMD kernels by CPU; a compiler may fuse a multiply-add): a file that is not
+  byte-identical is then still the same when it differs only in numbers, each within ``REL``
+  relative (table4's files: within the larger of ``REL`` and ``1e-12``). Anything else (a key,
+  column, row or text that differs) is never within a tolerance. On one machine with one build,
+  compare without it: the same code gives the same bytes.
 
 When a file is not identical, it is parsed (JSON / CSV) and the line printed for it names the
 keys or columns that differ and the largest relative difference of their numeric values
 (``|a - b| / max(|a|, |b|)``; a value that is numeric on one side only, a NaN against a number, or
 a missing row/key counts as ``inf``). The last line is ``identical: K of N files; largest relative
-difference: X``.
+difference: X`` (with ``--tolerance``, also how many files were within it).
 """
 from __future__ import annotations
 
@@ -71,6 +79,9 @@ TABLE4 = "table4"
 TABLE4_REL_TOL = 1e-12  # allowed only for table4's order-parameter files
 WALL_CLOCK_KEYS = frozenset({"wall_s", "overhead_s", "started_at", "ended_at", "import_s"})
 NEVER_COMPARED = frozenset({"timings.json"})
+PROBE = ("import json, numba, numpy, sumo_avoid; from numpy._core._multiarray_umath import __cpu_features__ as f, "
+         "__cpu_dispatch__ as d; print(json.dumps({'sumo_avoid': sumo_avoid.__file__, 'numpy': numpy.__version__, "
+         "'numba': numba.__version__, 'numpy_dispatch': [k for k in d if f.get(k)]}))")
 CHILD_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "PYTHONHASHSEED": "0"}
 
 
@@ -150,9 +161,9 @@ def cmd_record(args) -> int:
     except ValueError:
         pass
     env = child_env(code)
-    probe = subprocess.run([sys.executable, "-c", "import sumo_avoid; print(sumo_avoid.__file__)"],
-                           cwd=code, env=env, capture_output=True, text=True)
-    imported = pathlib.Path(probe.stdout.strip()).resolve() if probe.returncode == 0 else None
+    probe = subprocess.run([sys.executable, "-c", PROBE], cwd=code, env=env, capture_output=True, text=True)
+    build = json.loads(probe.stdout) if probe.returncode == 0 else {}
+    imported = pathlib.Path(build.pop("sumo_avoid")).resolve() if build else None
     if imported is None or imported.parent.parent != code:
         print(f"record: with PYTHONPATH={code}, sumo_avoid is imported from {imported} "
               f"(expected {code / 'sumo_avoid'}); {probe.stderr.strip()}", file=sys.stderr)
@@ -186,6 +197,8 @@ def cmd_record(args) -> int:
         "imported_sumo_avoid": str(imported),
         "python": sys.executable,
         "python_version": platform.python_version(),
+        "machine": platform.machine(),
+        "build": build,  # numpy / numba versions and the SIMD kernels numpy dispatches here
         "env": {**CHILD_ENV, "PYTHONPATH": str(code)},
         "seeds": args.seeds,
         "only": sorted(only),
@@ -368,6 +381,8 @@ def cmd_compare(args) -> int:
         raise SystemExit(f"compare: --only {sorted(only)} matches no job of either record")
     print(f"base {base} (code {mb.get('code_commit')}), new {new} (code {mn.get('code_commit')})"
           + (f", only {sorted(only)}" if only else ""))
+    if mb.get("build") != mn.get("build"):  # two machines or builds: bytes may differ in the last bits
+        print(f"builds differ: base {mb.get('build')}, new {mn.get('build')}")
     problems = 0
     for n in names:
         for side, jobs in (("base", jb), ("new", jn)):
@@ -405,16 +420,29 @@ def cmd_compare(args) -> int:
             continue
         worst = max(details.values())
         largest = max(largest, worst)
-        ok = is_table4 and worst < TABLE4_REL_TOL
+        tol = max(args.tolerance, TABLE4_REL_TOL) if is_table4 else args.tolerance
+        ok = worst <= tol if args.tolerance > 0 else is_table4 and worst < TABLE4_REL_TOL
         allowed += ok
         what = ", ".join(f"{k} ({_fmt(v)})" for k, v in sorted(details.items(), key=lambda kv: -kv[1])[:12])
         more = f" and {len(details) - 12} more" if len(details) > 12 else ""
-        verdict = f"within {TABLE4_REL_TOL:g} (allowed)" if ok else status.upper()
+        verdict = f"within {tol:g} (allowed)" if ok else status.upper()
         print(f"{verdict} {rel}: largest relative difference {_fmt(worst)}; differs in {what}{more}")
+    within = (f" ({allowed} file(s) within the tolerance {args.tolerance:g})" if args.tolerance > 0
+              else f" ({allowed} table4 file(s) within {TABLE4_REL_TOL:g})")
     print(f"identical: {identical} of {len(pairs)} files; largest relative difference: {_fmt(largest)}"
-          + (f" ({allowed} table4 file(s) within {TABLE4_REL_TOL:g})" if allowed else "")
+          + (within if allowed else "")
           + (f"; {problems} job problem(s)" if problems else ""))
     return 0 if identical + allowed == len(pairs) and problems == 0 else 1
+
+
+def _tolerance(text: str) -> float:
+    try:
+        x = float(text)
+    except ValueError:
+        x = math.nan
+    if not (0.0 <= x < 1.0):
+        raise argparse.ArgumentTypeError(f"bad tolerance {text!r} (a relative difference in [0, 1), e.g. 1e-9)")
+    return x
 
 
 def main(argv=None) -> int:
@@ -432,6 +460,9 @@ def main(argv=None) -> int:
     c.add_argument("new_dir", type=pathlib.Path)
     c.add_argument("--only", action="append", metavar="NAME",
                    help="compare only this scenario / job name or 'table4'; repeatable")
+    c.add_argument("--tolerance", type=_tolerance, default=0.0, metavar="REL",
+                   help="records of two machines / builds: numbers may differ by up to REL relative "
+                        "(default 0: byte-identical)")
     args = ap.parse_args(argv)
     return cmd_record(args) if args.command == "record" else cmd_compare(args)
 

@@ -97,6 +97,65 @@ def test_suite_time_reads_pytests_line_and_refuses_what_is_not_a_commit(capsys, 
     assert err.count("\n") == 3 and "'no-such-commit' is not a commit" in err and "is not a git repository" in err
 
 
+def _record(root, metrics: dict, rows: list[list], table4_cell: str):
+    """A hand-made record of same_behaviour.py: one run (metrics.json, trajectories.csv) and table4."""
+    import json
+
+    run = root / "runs" / "x-s1"
+    run.mkdir(parents=True)
+    (run / "metrics.json").write_text(json.dumps(metrics, indent=2, sort_keys=True) + "\n")
+    (run / "trajectories.csv").write_text("\n".join(",".join(map(str, r)) for r in rows) + "\n")
+    (root / "table4").mkdir()
+    (root / "table4" / "table4.csv").write_text(f"v,mu\n4,{table4_cell}\n")
+    jobs = [{"name": "table4", "out": "table4", "exit_code": 0}, {"name": "x-s1", "out": "runs/x-s1", "exit_code": 0}]
+    (root / "record.json").write_text(json.dumps({"code_commit": "abc", "jobs": jobs}))
+    return root
+
+
+def test_same_behaviour_compare_within_a_relative_tolerance(tmp_path, capsys):
+    """Records of two machines: byte-identical by default; with --tolerance REL, numbers within REL
+    relative pass and the largest difference is printed; a changed text or column never passes."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        import same_behaviour as sb
+    finally:
+        sys.path.pop(0)
+    head = ["step", "id", "x", "y"]
+    base = _record(tmp_path / "base", {"min_gap_m": 1.25, "n": 3, "ok": True},
+                   [head, [0, "ego", 1234.5, -0.75], [1, "ego", 1240.0, -0.5]], "0.8125")
+    # x off by 1e-13 relative, min_gap_m by 3e-13, table4's mu by 5e-13 (table4 alone allows 1e-12)
+    new = _record(tmp_path / "new", {"min_gap_m": 1.25 * (1 + 3e-13), "n": 3, "ok": True},
+                  [head, [0, "ego", 1234.5 * (1 + 1e-13), -0.75], [1, "ego", 1240.0, -0.5]], repr(0.8125 * (1 + 5e-13)))
+    same = _record(tmp_path / "same", {"min_gap_m": 1.25, "n": 3, "ok": True},
+                   [head, [0, "ego", 1234.5, -0.75], [1, "ego", 1240.0, -0.5]], "0.8125")
+
+    def compare(b, n, *opts):
+        code = sb.main(["compare", str(b), str(n), *opts])
+        return code, capsys.readouterr().out.strip().splitlines()
+
+    assert compare(base, same)[0] == 0
+    code, out = compare(base, new)  # default: byte-identical, but for table4's 1e-12
+    assert code == 1 and any(line.startswith("DIFFERS runs/x-s1/metrics.json") for line in out)
+    assert any(line.startswith("within 1e-12 (allowed) table4/table4.csv") for line in out)
+    code, out = compare(base, new, "--tolerance", "1e-12")
+    assert code == 0, out
+    assert any(line.startswith("within 1e-12 (allowed) runs/x-s1/trajectories.csv: largest relative difference 1e-13")
+               for line in out), out
+    assert out[-1] == "identical: 0 of 3 files; largest relative difference: 5e-13 (3 file(s) within the tolerance 1e-12)"
+    code, out = compare(base, new, "--tolerance", "2e-13")  # metrics.json's 3e-13 is beyond it
+    assert code == 1 and any(line.startswith("DIFFERS runs/x-s1/metrics.json") for line in out)
+    assert any(line.startswith("within 2e-13 (allowed) runs/x-s1/trajectories.csv") for line in out)
+    assert any(line.startswith("within 1e-12 (allowed) table4/table4.csv") for line in out)  # never below 1e-12
+    # a changed id or a changed key is no rounding: beyond any tolerance
+    text = _record(tmp_path / "text", {"min_gap_m": 1.25, "n": 3, "ok": False},
+                   [head, [0, "car", 1234.5, -0.75], [1, "ego", 1240.0, -0.5]], "0.8125")
+    code, out = compare(base, text, "--tolerance", "0.5")
+    assert code == 1 and "largest relative difference: inf" in out[-1]
+    assert any(line.startswith("DIFFERS runs/x-s1/trajectories.csv") and "id (inf)" in line for line in out)
+    with pytest.raises(SystemExit):
+        sb.main(["compare", str(base), str(new), "--tolerance", "-1"])
+
+
 def test_replay_record_benchmark_prints_its_share():
     out = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "replay_record.py"), "--scenario", "crash_straight",
                           "--repeat", "2"], capture_output=True, text=True, timeout=300, cwd=ROOT)

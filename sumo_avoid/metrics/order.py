@@ -28,12 +28,13 @@ How it is computed, all steps at once (no loop over steps except where a step's 
   while a step has at most ``_DENSE_MAX`` egos (at N = 100 about twice as fast as a k-d tree over
   all rows; from about 200 egos the tree wins); above, one cKDTree of (x, y, step index × gap),
   the gap larger than any distance inside a step, so no neighbour is ever found in another step
-  and in-step distances are unchanged (the third coordinate differs by exactly 0). Both give the
-  same floats (dx² + dy², rooted). Collisions: pairs closer than r_coll can only join egos whose
+  and in-step distances are unchanged (the third coordinate differs by exactly 0). Both compute
+  dx² + dy², rooted: the same floats up to a rounding in the last bits (tested within 2 ULPs;
+  which one runs depends on the egos per step only, so a run stays bit-identical). Collisions: pairs closer than r_coll can only join egos whose
   nearest neighbour is that close, so only those are searched (a cKDTree of them, stacked so).
 * Per-step and per-cluster sums with ``np.bincount`` over the (step, id)-sorted rows, which adds in
-  row order whatever the labels: with the same clusters and distances, the same floats as the
-  loop over steps (tests/metrics/test_order.py keeps one as the reference).
+  row order whatever the labels: with the same clusters and distances, the floats of the loop over
+  steps (tests/metrics/test_order.py keeps one as the reference and compares within 1e-12 relative).
 """
 from __future__ import annotations
 
@@ -134,7 +135,7 @@ def _nearest_dense(pos, rank, start, count) -> np.ndarray:
     """Distance to the nearest other ego of the same step (inf when alone), from every distance of
     the step: the steps padded to the most egos of a step (NaN, which ``fmin`` skips), a few steps at
     a time so that the (steps, N, N) arrays stay in cache. dx² + dy², then the square root of the
-    smallest, as the k-d tree sums and roots it: the same floats."""
+    smallest, as the k-d tree sums and roots it (the same floats but for a last-bit rounding)."""
     n_max = int(count.max())
     col = np.arange(len(pos)) - start[rank]
     pad = np.full((len(count), n_max, 2), np.nan)

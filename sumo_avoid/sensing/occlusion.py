@@ -15,8 +15,10 @@ computation (:func:`scan`).
    the perpendiculars from the sensor) inside its sectors.
 
 The arithmetic is written operation for operation like the numpy formulation it replaced (same
-expressions, same order, first minimum on ties), so the detections are bit-identical to it
-(checked on the benchmark's scans and random scenes in tests/sensing/test_radar.py). numba is used
+expressions, same order, first minimum on ties), so the detections are those of it and their
+values agree within 1e-12 relative (checked on random scenes in tests/sensing/test_radar.py; not bit
+for bit across machines: numpy dispatches SIMD kernels by CPU, which round ``hypot`` and ``arctan2``
+differently in the last bits). numba is used
 because the numpy version spends its time on ~150 array operations over small per-ego arrays (the
 radar benchmark's largest own cost); this loop does the same work in a fraction of that. Compiled
 on first use and cached on disk (``cache=True``). Reductions and slice copies are plain loops,
@@ -206,7 +208,7 @@ def scan(spos, hd, svel, polys, tvel, ptr, cand, half, max_range):
 @njit(cache=True, error_model="numpy")
 def boxes(pos, cos_h, sin_h, length, width):
     """Vehicles' footprints as :func:`sumo_avoid.core.geometry.footprint_corners` computes them (same
-    operations, same order: bit-identical; the cosines and sines come from numpy), plus each one's
+    operations, same order: equal within 1e-12; the cosines and sines come from numpy), plus each one's
     centre (mean of its corners) and circumscribed radius. Returns corners (N, 4, 2), centres
     (N, 2), radii (N,)."""
     N = pos.shape[0]

@@ -1,6 +1,9 @@
 """motion_summary (sorted and grouped on integer id codes) and order._nearest_two (a k-d tree query
 cut short by a distance bound) against the former code, kept here as the reference: identical
-results (==) on random tables."""
+results (==) on random tables. Exact, not within a tolerance, because both sides do the same
+arithmetic with the same routines on the same values in the same order (the same hypot, the same
+pandas group sums over the rows sorted alike; the same k-d tree's distance routine, the bound only
+prunes which nodes are visited): one implementation on one machine, the determinism contract."""
 import json
 
 import numpy as np
@@ -67,7 +70,7 @@ def test_motion_summary_same_as_former(seed):
     t, goals = random_traj(seed)
     for g, tol in ((goals, 2.0), ({}, 1.0), (goals, 100.0)):
         new, ref = motion_summary(t, g, tol), ref_motion_summary(t, g, tol)
-        assert json.dumps(new) == json.dumps(ref)  # values, None, and key order
+        assert json.dumps(new) == json.dumps(ref)  # values, None, and key order (same sums, same order: exact)
     none = t.assign(is_ego=False)
     assert motion_summary(none, goals, 1.0) == ref_motion_summary(none, goals, 1.0)
 
@@ -83,7 +86,7 @@ def test_nearest_two_same_as_plain_query(seed):
     tree = cKDTree(pts)
     d0, j0 = tree.query(pts, k=2)
     d1, j1 = _nearest_two(tree, pts)
-    assert np.array_equal(d0, d1)
+    assert np.array_equal(d0, d1)  # the tree's own distances, by the same routine: exact
     assert np.array_equal(np.isfinite(d0), np.isfinite(d1))
     ok = np.isfinite(d0[:, 1])
     np.testing.assert_allclose(np.linalg.norm(pts[j1[ok, 1]] - pts[ok], axis=1), d1[ok, 1], rtol=1e-12)

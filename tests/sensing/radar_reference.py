@@ -1,6 +1,7 @@
 """The numpy formulation of the radar's occlusion step that sumo_avoid/sensors/occlusion.py (numba)
-replaced, kept as an independent reference: tests/sensing/test_radar.py checks that the kernel's detections
-are bit-identical to this one on random scenes and on a dense-traffic scene. Vectorised over all
+replaced, kept as an independent reference: tests/sensing/test_radar.py checks that the kernel gives this
+one's detections, their values within 1e-12 relative (two implementations: not bit for bit), on random
+scenes and on a dense-traffic scene. Vectorised over all
 egos and targets: candidates padded into (E, T) blocks, angular intervals, sectors owned by the
 target their middle ray hits first, nearest visible point at owned sector ends or special angles.
 Also kept: the numpy footprints (``targets_reference``) and the k-d tree candidate stage

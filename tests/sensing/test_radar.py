@@ -427,6 +427,8 @@ def test_compiled_footprints_and_candidates_equal_the_numpy_and_kdtree_versions(
         half = math.radians(r.p.fov_deg) / 2
         e0, n0 = _candidates(spos, fwd, centre, radius, rows, r.p.max_range_m, half)
         e1, n1 = candidates(spos, fwd, centre, radius, rows, r.p.max_range_m, math.cos(half), math.sin(half))
+        # integer (ego, target) pairs, a logical result: exact (a pair at the range bound to the last bit
+        # could split the two, and these random scenes hold none)
         assert np.array_equal(e0, e1) and np.array_equal(n0, n1), k
         pairs += len(e1)
     assert pairs > 2000
