@@ -50,27 +50,10 @@ from sumo_avoid.core.types import EgoTask, Keys, Observation
 from sumo_avoid.road.polyline import arc_lengths, polyline_project
 from sumo_avoid.planning import kernels
 from sumo_avoid.planning.ga import GaParams, clearance, plan, resample
-from sumo_avoid.planning.pursuit import (
-    aim_angle,
-    arena_bounds,
-    cone_gap,
-    corridor_gap,
-    pursuit_velocity,
-    rest_of,
-)
+from sumo_avoid.planning.pursuit import aim_angle, arena_bounds, cone_gap, corridor_gap, pursuit_velocity, rest_of
 from sumo_avoid.planning.radar_map import RadarMap, farther_than, sampled_edges, standing_edges, static_returns
-from sumo_avoid.planning.corridor import (
-    CLIP_SLACK_M,
-    all_lanes_corridor,
-    corridor_clip,
-    follow_speed,
-    in_frame,
-    lane_centres,
-    meeting_points,
-    pick_lane,
-    wall_points,
-    whole_lanes,
-)
+from sumo_avoid.planning.corridor import (CLIP_SLACK_M, all_lanes_corridor, corridor_clip, follow_speed, in_frame,
+                                         lane_centres, meeting_points, pick_lane, wall_points, whole_lanes)
 
 
 @dataclass(frozen=True)
