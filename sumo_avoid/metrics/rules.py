@@ -16,7 +16,9 @@ Details per crossing of a yielding link in ``yield_crossings`` (ego, junction, t
 first foe and its arrival time, s).
 
 A foe that has stood still at its line for ``standing_foe_wait_s`` (its light unchanged meanwhile)
-is no foe, as for the layer (road.yielding.stands_for_good).
+is no foe, as for the layer (road.yielding.stands_for_good); its standing counts from its first
+recorded step (the recording keeps vehicles within ``output.record_radius_m`` of an ego, 300 m; the
+layer follows those within ``lookahead_m``, 250 m, so it never gives up on a foe sooner than this).
 
 At an all-way stop, first come first served: a foe standing at its line that came to stand after
 the ego did is no foe, the others arrive as from a standing start (safety.yielding).

@@ -52,6 +52,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from sumo_avoid.core.geometry import near_any
 from sumo_avoid.road.polyline import polyline_point_at, polyline_track
 from sumo_avoid.road.regulation import RED, STOP_SIGNS, RulesParams
 from sumo_avoid.core.types import EgoTask, Keys
@@ -141,18 +142,23 @@ class TrafficRulesLayer:
         self._foes |= any(lk.foes for lk in task.links)
 
     def _track_standing(self, obs) -> None:
-        """When each vehicle came to stand (for the order of arrival at all-way stops, and the foes
-        that stand for good), and when each light last changed."""
+        """When each vehicle near an ego came to stand (for the order of arrival at all-way stops,
+        and the foes that stand for good), and when each light last changed."""
         snap, t = obs.snapshot, obs.snapshot.time_s
         for tls, state in snap.signals.items():
             if self._tls_since.get(tls, ("",))[0] != state:
                 self._tls_since[tls] = (state, t)
-        for vid, v in zip(snap.ids, snap.speed):
-            start, end = self._stand.get(vid, (math.nan, math.nan))
+        # only those within lookahead_m of an ego, as the recording has them (output.record_radius_m,
+        # 300 m) for the metric to judge the same: one farther away is forgotten, its runs unknown
+        near = np.flatnonzero(near_any(snap.pos, snap.pos[obs.ego_rows], self.p.lookahead_m))
+        known, stand = self._stand, {}
+        for vid, v in zip([snap.ids[i] for i in near], snap.speed[near].tolist()):
+            start, end = stand[vid] = known.get(vid, (math.nan, math.nan))
             if v < STAND_MPS and not (start == start and end != end):  # not standing yet: a new run starts
-                self._stand[vid] = (t, math.nan)
+                stand[vid] = (t, math.nan)
             elif v >= STAND_MPS and start == start and end != end:  # standing until now: the run ends
-                self._stand[vid] = (start, t)
+                stand[vid] = (start, t)
+        self._stand = stand
 
     def _standing_since(self, snap):
         """since(row, tls) for :func:`~sumo_avoid.road.yielding.stands_for_good`: when the row came to
