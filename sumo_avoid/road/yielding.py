@@ -30,7 +30,9 @@ it cannot reach); SUMO's drivers do not wait for it for ever either (a foe that 
 registers no arrival; ``--ignore-junction-blocker``; the junction model's jmIgnoreFoeProb with
 jmIgnoreFoeSpeed, which lets a driver ignore foes slower than a speed; impatience growing with the
 waiting time over ``--time-to-impatience``; SUMO's "Definition of Vehicles, Vehicle Types, and
-Routes", junction model parameters). The moment it moves again it counts again.
+Routes", junction model parameters). The moment it moves again it counts again. Not at an all-way
+stop or on a link of equal rank (``WAITS_FOR_EGO``): a foe standing there may be waiting for the ego
+itself, and the two would set off together (generated grid08, seed 2: after 30 s both went and met).
 
 An **all-way stop** ('w') is first come, first served (:func:`waits_its_turn`). A foe still on its
 way to its stop line that can stop before the conflict point (v^2 / (2 * 4.5 m/s^2) <= x, SUMO's
@@ -63,6 +65,9 @@ AT_LINE_M = 5.0
 START_MPS = 5.0
 #: A foe that stood at its line and set off less than this ago is crossing (not braking to stop), s.
 DEPART_S = 5.0
+#: Foe links whose vehicles may stand waiting for the ego itself (all-way stop, equal rank): no foe of
+#: theirs stands for good (when both went at once after waiting for each other they met: grid08 seed 2).
+WAITS_FOR_EGO = frozenset("w=")
 #: A standing foe whose front is at most this far past its stop line stands at it (not in the junction), m.
 STANDING_PAST_LINE_M = 1.0
 #: A foe on its way to an all-way stop's line brakes at most this hard (SUMO's default passenger decel), m/s^2.
@@ -170,7 +175,8 @@ def foe_arrivals(foes: tuple[FoeLink, ...], signals, lanes: dict[str, list[int]]
                 if r in exclude or not x > -float(length[r]):
                     continue
                 v = float(speed[r])
-                if standing is not None and stands_for_good(x - foe.line_m, v, *standing, r, foe.tls):
+                if (standing is not None and foe.state not in WAITS_FOR_EGO
+                        and stands_for_good(x - foe.line_m, v, *standing, r, foe.tls)):
                     continue
                 if allway and order is not None and waits_its_turn(x - foe.line_m, x, v, *order, r):
                     continue

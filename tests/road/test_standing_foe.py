@@ -33,6 +33,11 @@ def test_a_foe_standing_at_its_line_for_good_by_hand():
     standing = (100.0, wait, since(70.0))
     assert [r for _, r, _ in foe_arrivals((foe,), {}, lanes, lane_pos, speed, length, set())] == [0, 1]
     assert [r for _, r, _ in foe_arrivals((foe,), {}, lanes, lane_pos, speed, length, set(), None, standing)] == [1]
+    # at an all-way stop or a link of equal rank it may be waiting for the ego itself: it still counts
+    for state in "w=":
+        other = FoeLink(state=state, approach=foe.approach, line_m=6.0)
+        assert [r for _, r, _ in foe_arrivals((other,), {}, lanes, lane_pos, speed, length, set(), None,
+                                              standing)] == [0, 1]
 
 
 @pytest.fixture(scope="module")
