@@ -3,12 +3,13 @@ the sensors and controllers and no collision, gap or TTC pair for the metrics; t
 ego's level still is. The net is built here by netconvert from tests/data/levels (a road 8 m over
 another, crossing it without a junction); the flat variant is the same net with every z removed."""
 import numpy as np
+import pandas as pd
 import pytest
 
 from sumo_avoid.core.levels import LEVELS, has_levels, same_level
 from sumo_avoid.core.snapshot import Snapshot
 from sumo_avoid.core.types import Observation
-from sumo_avoid.metrics import basic
+from sumo_avoid.metrics import basic, vru
 from sumo_avoid.runs import outputs, runner
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.sensing.perception import obstacle_vehicles
@@ -39,6 +40,19 @@ def test_levels_by_hand():
     flat = Snapshot(0.0, snap.ids, snap.pos, snap.vel, snap.heading, snap.length, snap.width, snap.is_ego)
     assert not flat.levels and flat.z.tolist() == [0.0, 0.0, 0.0]
     assert len(obstacle_vehicles(Observation(flat, ("ego",), np.array([0]), np.zeros(1)), 0, flat.pos[0], 50.0)[0]) == 2
+
+
+def test_the_vru_metrics_pair_only_road_users_on_one_level():
+    """A person and a cyclist on a bridge right over the ego: no pair; the same on its level: contacts."""
+    ego = dict(step=[0], time_s=[0.0], id=["ego"], is_ego=[True], x=[0.0], y=[0.0], heading=[0.0], length=[4.5],
+               width=[1.8])
+    bike = dict(step=[0], time_s=[0.0], id=["bike"], is_ego=[False], x=[1.0], y=[0.0], heading=[0.0], length=[1.6],
+                width=[0.6])
+    person = pd.DataFrame(dict(step=[0], time_s=[0.0], id=["p"], x=[0.5], y=[0.0], length=[0.2], width=[0.5]))
+    for z, pairs in ((8.0, 0), (0.5, 1)):
+        traj = pd.concat([pd.DataFrame({**ego, "z": [0.0]}), pd.DataFrame({**bike, "z": [z]})], ignore_index=True)
+        assert len(vru.ego_person_pairs(traj, person.assign(z=[z]))) == pairs
+        assert len(vru.cyclist_gaps(traj, {"bike": "bicycle"})) == pairs
 
 
 @pytest.fixture(scope="module")
