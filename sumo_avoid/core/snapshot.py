@@ -12,6 +12,8 @@ from types import MappingProxyType
 
 import numpy as np
 
+from sumo_avoid.core.levels import has_levels, same_level
+
 
 def _frozen(a, dtype=float) -> np.ndarray:
     arr = np.array(a, dtype=dtype, copy=True)
@@ -41,6 +43,7 @@ class Snapshot:
     lane_pos: np.ndarray | None = None  # (N,) SUMO position of the front bumper along that lane, m (nan = not known)
     vclass: tuple[str, ...] = ()  # (N,) SUMO vehicle class ("passenger", "bicycle", "bus", "pedestrian", ...; "" = not known)
     is_person: np.ndarray | None = None  # (N,) bool, a person (not a vehicle); default none is
+    z: np.ndarray | None = None  # (N,) height of the position SUMO reports, m (core.levels; default 0)
 
     def __post_init__(self):
         n = len(self.ids)
@@ -58,10 +61,25 @@ class Snapshot:
         object.__setattr__(self, "vclass", tuple(self.vclass) if len(self.vclass) == n else ("",) * n)
         person = np.zeros(n, bool) if self.is_person is None or len(self.is_person) != n else self.is_person
         object.__setattr__(self, "is_person", _frozen(person, bool).reshape(n))
+        z = np.zeros(n) if self.z is None or len(self.z) != n else self.z
+        object.__setattr__(self, "z", _frozen(z).reshape(n))
+        object.__setattr__(self, "_levels", has_levels(self.z))
 
     @property
     def n(self) -> int:
         return len(self.ids)
+
+    @property
+    def levels(self) -> bool:
+        """Whether the road users stand on more than one level (a bridge over a road, core.levels)."""
+        return self._levels
+
+    def same_level(self, row: int, rows=None) -> np.ndarray:
+        """Which rows (all, or ``rows``) share row ``row``'s level (core.levels); all on a flat net."""
+        rows = np.arange(self.n) if rows is None else np.asarray(rows, int)
+        if not self._levels:
+            return np.ones(len(rows), bool)
+        return same_level(self.z[rows], self.z[row])
 
     @property
     def speed(self) -> np.ndarray:

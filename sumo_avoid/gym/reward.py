@@ -93,6 +93,7 @@ class RewardTracker:
         half = 0.5 * np.hypot(snap.length, snap.width)
         gap = np.hypot(*(snap.pos - snap.pos[row]).T)
         near = np.flatnonzero((gap <= half + half[row] + 1e-9) & (np.arange(snap.n) != row))
+        near = near[snap.same_level(row, near)]  # one passing over the other touches nothing (core.levels)
         if not len(near):
             return frozenset()
         corners = footprint_corners(snap.pos, snap.heading, snap.length, snap.width)

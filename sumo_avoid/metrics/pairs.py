@@ -18,6 +18,9 @@ exact test to the distances it computes itself (``np.hypot`` of the coordinate
 differences), so the results do not depend on the tree's rounding or on which pairs beyond the radius
 came along.
 
+Pairs are of road users on one level (:mod:`sumo_avoid.core.levels`, with the table's ``z`` column): a
+car on a bridge over the ego is no pair of its.
+
 Orientation, as in an enumeration over rows sorted by (step, id): ``i`` is the ego of an
 ego/non-ego pair, and of two egos the one that comes first in that order (the smaller id).
 """
@@ -28,6 +31,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 from scipy.spatial import cKDTree
+
+from sumo_avoid.core.levels import has_levels, same_level
 
 WIDEN = 1.0 + 1e-9  # relative widening of a search radius
 SLACK_M = 1e-9  # absolute widening, m
@@ -46,6 +51,7 @@ class Rows:
     step: np.ndarray  # int64
     ids: np.ndarray  # str (object), the ``id`` column
     is_ego: np.ndarray  # bool
+    z: np.ndarray | None = None  # height, m (the ``z`` column; None: a flat net, all 0)
     uniq: np.ndarray = field(init=False)  # distinct steps, ascending
     rank: np.ndarray = field(init=False)  # index of each row's step in uniq
     order_pos: np.ndarray = field(init=False)  # position of each row when sorted by (step, id), stable
@@ -75,7 +81,8 @@ class Rows:
     def of(cls, traj: pd.DataFrame) -> "Rows":
         col = {c: traj[c].to_numpy(dtype=float) for c in ("x", "y", "heading", "length", "width", "time_s")}
         return cls(**col, step=traj["step"].to_numpy(dtype=np.int64),
-                   ids=traj["id"].astype(str).to_numpy(dtype=object), is_ego=traj["is_ego"].to_numpy(dtype=bool))
+                   ids=traj["id"].astype(str).to_numpy(dtype=object), is_ego=traj["is_ego"].to_numpy(dtype=bool),
+                   z=traj["z"].to_numpy(dtype=float) if "z" in traj else None)
 
     def _tree(self, egos: bool):
         """cKDTree of the ego (or non-ego) rows in the stacked coordinates, and those rows."""
@@ -108,4 +115,8 @@ class Rows:
             m = t_ego.sparse_distance_matrix(t_other, r, output_type="ndarray")
             i.append(ego[m["i"]])
             j.append(other[m["j"]])
-        return np.concatenate(i).astype(np.int64), np.concatenate(j).astype(np.int64)
+        i, j = np.concatenate(i).astype(np.int64), np.concatenate(j).astype(np.int64)
+        if self.z is not None and has_levels(self.z):  # only pairs on one level (core.levels)
+            keep = same_level(self.z[i], self.z[j])
+            i, j = i[keep], j[keep]
+        return i, j

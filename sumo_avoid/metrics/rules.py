@@ -15,6 +15,11 @@ recording).
 Details per crossing of a yielding link in ``yield_crossings`` (ego, junction, time, state, the
 first foe and its arrival time, s).
 
+A foe that has stood still at its line for ``standing_foe_wait_s`` (its light unchanged meanwhile)
+is no foe, as for the layer (road.yielding.stands_for_good); its standing counts from its first
+recorded step (the recording keeps vehicles within ``output.record_radius_m`` of an ego, 300 m; the
+layer follows those within ``lookahead_m``, 250 m, so it never gives up on a foe sooner than this).
+
 At an all-way stop, first come first served: a foe standing at its line that came to stand after
 the ego did is no foe, the others arrive as from a standing start (safety.yielding).
 
@@ -32,6 +37,7 @@ from sumo_avoid.metrics.base import Metric
 from sumo_avoid.rollout.result import RunResult
 from sumo_avoid.road.regulation import RED, STOP_SIGNS
 from sumo_avoid.road.yielding import (
+    STAND_MPS,
     can_give_way,
     critical_gap_s,
     first_crossing,
@@ -128,15 +134,30 @@ def yield_crossings(run: RunResult) -> list[dict]:
                     h = before[before["id"] == ids[r]]
                     return stand_run(h["time_s"].to_numpy(), h["speed"].to_numpy(float))
                 order = (float(t[k]), float(t[at[0]]) if len(at) else np.inf, history)
+            standing = (float(t[k]), p.standing_foe_wait_s, _standing_since(run, traj, steps[k], float(t[k]), ids, speed))
             t_f, who = foe_arrival(lk.foes, signals, rows_by_lane(now["lane"].fillna("").to_numpy()), now["lane_pos"].to_numpy(float),
                                    speed, now["length"].to_numpy(float), set(np.flatnonzero(ids == vid).tolist()), skip,
-                                   order)
+                                   order, standing)
             t_c = critical_gap_s(lk, p)
             out.append({"ego": vid, "junction": lk.junction, "time_s": float(t[k + 1]),
                         "state": link_state(signals, lk.tls, lk.link_index, lk.state),
                         "foe": str(ids[who]) if who >= 0 else "", "foe_arrival_s": None if who < 0 else round(t_f, 3),
                         "violation": bool(t_f < t_c)})
     return out
+
+
+def _standing_since(run: RunResult, traj, step: int, t: float, ids, speed):
+    """since(row, tls) of the rows recorded at ``step`` (time ``t``; their ``ids``, ``speed``), for
+    yielding.stands_for_good: when the row came to stand (by the recording up to then; ``t`` when it
+    moves), or when light ``tls`` last changed if that is later."""
+    def since(r: int, tls: str) -> float:
+        start = t
+        if speed[r] < STAND_MPS:
+            h = traj[(traj["step"] <= step) & (traj["id"] == ids[r])]
+            start = stand_run(h["time_s"].to_numpy(), h["speed"].to_numpy(float))[0]
+        light = _state_at(run.signals, tls, t)[1] if tls and run.signals is not None else -np.inf
+        return max(start, light)
+    return since
 
 
 def stop_crossings(run: RunResult) -> list[dict]:

@@ -13,6 +13,7 @@ persons and cyclists, from the recording.
   (:data:`sumo_avoid.road.elements.VRU_CLASSES`.)
 * ``min_gap_vru_m``: the smallest distance between an ego's footprint and a VRU (a person's disc, a
   cyclist's footprint) present at the same step; None when no ego ever shares a step with one.
+* Only pairs on one level count (:mod:`sumo_avoid.core.levels`; the recording's ``z``).
 """
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ import numpy as np
 import pandas as pd
 
 from sumo_avoid.core.geometry import convex_distance, footprint_corners
+from sumo_avoid.core.levels import same_level
 from sumo_avoid.road.elements import VRU_CLASSES
 
 PERSON_EVENT_COLS = ["step", "time_s", "a", "b", "x", "y"]
@@ -46,9 +48,13 @@ def ego_person_pairs(traj: pd.DataFrame, persons: pd.DataFrame | None) -> pd.Dat
     cols = ["step", "time_s", "ego", "person", "gap_m", "x", "y"]
     if persons is None or persons.empty or traj.empty:
         return pd.DataFrame(columns=cols)
-    ego = traj.loc[traj["is_ego"].astype(bool), ["step", "time_s", "id", "x", "y", "heading", "length", "width"]]
-    per = persons[["step", "id", "x", "y", "length", "width"]]
+    levels = "z" in traj and "z" in persons  # heights recorded: pairs on one level only (core.levels)
+    ego = traj.loc[traj["is_ego"].astype(bool), ["step", "time_s", "id", "x", "y", "heading", "length", "width"]
+                   + (["z"] if levels else [])]
+    per = persons[["step", "id", "x", "y", "length", "width"] + (["z"] if levels else [])]
     m = ego.merge(per, on="step", suffixes=("_e", "_p"))
+    if levels:
+        m = m[same_level(m["z_e"].to_numpy(float), m["z_p"].to_numpy(float))]
     if m.empty:
         return pd.DataFrame(columns=cols)
     d = rectangle_point_distance(m["x_e"].to_numpy(), m["y_e"].to_numpy(), m["heading"].to_numpy(),
@@ -86,8 +92,10 @@ def cyclist_gaps(traj: pd.DataFrame, classes: dict) -> np.ndarray:
     is_ego = traj["is_ego"].to_numpy(bool)
     if not vru.any() or not is_ego.any():
         return np.zeros(0)
-    cols = ["step", "x", "y", "heading", "length", "width"]
+    cols = ["step", "x", "y", "heading", "length", "width"] + (["z"] if "z" in traj else [])
     m = traj.loc[is_ego, cols].merge(traj.loc[vru & ~is_ego, cols], on="step", suffixes=("_e", "_v"))
+    if "z" in traj:  # pairs on one level only (core.levels)
+        m = m[same_level(m["z_e"].to_numpy(float), m["z_v"].to_numpy(float))]
     if m.empty:
         return np.zeros(0)
     ce = footprint_corners(m[["x_e", "y_e"]].to_numpy(), m["heading_e"].to_numpy(), m["length_e"].to_numpy(),

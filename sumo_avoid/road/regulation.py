@@ -39,6 +39,11 @@ class RulesParams:
                                               "past the path, or standing beside it, does not hold the ego), m")
     crossing_margin_m: float = field_doc(1.0, doc="... and to one within this much of the footprint's side as it "
                                                   "passes over the crossing, m")
+    standing_foe_wait_s: float = field_doc(30.0, positive=True, doc="a foe with priority that has stood still at (or "
+                                           "behind) its stop line this long, its light unchanged, no longer counts "
+                                           "as arriving: the ego goes (SUMO's drivers go when such a foe does not "
+                                           "come: --ignore-junction-blocker, jmIgnoreFoeProb with jmIgnoreFoeSpeed, "
+                                           "impatience growing over --time-to-impatience), s")
     zipper_headway_s: float = field_doc(1.0, positive=True, doc="t_c of a zipper merge ('Z' links): the ego enters "
                                                                  "at least this long after and before the foes "
                                                                  "(accepted freeway-merge lead/lag gaps are ~1 s), s")

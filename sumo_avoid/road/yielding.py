@@ -22,6 +22,18 @@ standing at its line as its light turns green counts as arriving seconds later t
 rule is not applied at unsignalised links, where it would hold the ego at a roundabout entry for
 ring cars slowing near the entry.
 
+A foe that **stands for good** (:func:`stands_for_good`) is no foe: standing still (slower than
+``STAND_MPS``) at or behind its stop line for ``standing_foe_wait_s`` (``[layers.traffic]``, 30 s)
+or longer, counted from when it came to stand or, on a signalised link, from the last change of its
+light if that came later. Such a foe is not coming (blocked, stopped on its lane, waiting for a lane
+it cannot reach); SUMO's drivers do not wait for it for ever either (a foe that will not pass
+registers no arrival; ``--ignore-junction-blocker``; the junction model's jmIgnoreFoeProb with
+jmIgnoreFoeSpeed, which lets a driver ignore foes slower than a speed; impatience growing with the
+waiting time over ``--time-to-impatience``; SUMO's "Definition of Vehicles, Vehicle Types, and
+Routes", junction model parameters). The moment it moves again it counts again. Not at an all-way
+stop or on a link of equal rank (``WAITS_FOR_EGO``): a foe standing there may be waiting for the ego
+itself, and the two would set off together (generated grid08, seed 2: after 30 s both went and met).
+
 An **all-way stop** ('w') is first come, first served (:func:`waits_its_turn`). A foe still on its
 way to its stop line that can stop before the conflict point (v^2 / (2 * 4.5 m/s^2) <= x, SUMO's
 default deceleration) will stop there first: no foe yet. A foe standing more than ``AT_LINE_M``
@@ -53,6 +65,11 @@ AT_LINE_M = 5.0
 START_MPS = 5.0
 #: A foe that stood at its line and set off less than this ago is crossing (not braking to stop), s.
 DEPART_S = 5.0
+#: Foe links whose vehicles may stand waiting for the ego itself (all-way stop, equal rank): no foe of
+#: theirs stands for good (when both went at once after waiting for each other they met: grid08 seed 2).
+WAITS_FOR_EGO = frozenset("w=")
+#: A standing foe whose front is at most this far past its stop line stands at it (not in the junction), m.
+STANDING_PAST_LINE_M = 1.0
 #: A foe on its way to an all-way stop's line brakes at most this hard (SUMO's default passenger decel), m/s^2.
 FOE_DECEL_MPS2 = 4.5
 #: On yellow a foe that can stop before its line braking at most this stops there (SUMO's drivers stop
@@ -137,12 +154,14 @@ def rows_by_lane(lanes) -> dict[str, list[int]]:
 
 
 def foe_arrivals(foes: tuple[FoeLink, ...], signals, lanes: dict[str, list[int]], lane_pos, speed, length,
-                 exclude: set[int], order=None) -> list[tuple[float, int, float]]:
+                 exclude: set[int], order=None, standing=None) -> list[tuple[float, int, float]]:
     """(arrival time t_f at its conflict point, s; row; distance x of its front bumper to it, m) of
     every vehicle of an open foe link that has not passed it. ``lanes`` maps lane ids to rows of the
     arrays ``lane_pos``, ``speed``, ``length``. At an all-way stop ``order`` = (now, when the ego
     first stood at its line, history(row) -> (start, end) of the row's last standing run) decides
-    who goes first (module docstring); None: every foe there counts."""
+    who goes first (module docstring); None: every foe there counts. ``standing`` = (now, wait,
+    since(row, tls) -> when the row came to stand, or its light ``tls`` last changed if later) leaves
+    out the foes that stand for good (:func:`stands_for_good`)."""
     out = []
     for foe in foes:
         state = link_state(signals, foe.tls, foe.link_index, foe.state)
@@ -156,6 +175,9 @@ def foe_arrivals(foes: tuple[FoeLink, ...], signals, lanes: dict[str, list[int]]
                 if r in exclude or not x > -float(length[r]):
                     continue
                 v = float(speed[r])
+                if (standing is not None and foe.state not in WAITS_FOR_EGO
+                        and stands_for_good(x - foe.line_m, v, *standing, r, foe.tls)):
+                    continue
                 if allway and order is not None and waits_its_turn(x - foe.line_m, x, v, *order, r):
                     continue
                 if yellow and x - foe.line_m > 0.0 and can_give_way(x - foe.line_m, v, YELLOW_STOP_DECEL_MPS2):
@@ -164,6 +186,16 @@ def foe_arrivals(foes: tuple[FoeLink, ...], signals, lanes: dict[str, list[int]]
                 starting = allway or (bool(foe.tls) and x - foe.line_m <= AT_LINE_M and v < START_MPS)
                 out.append((arrival_time(x, v, starting), r, x))
     return out
+
+
+def stands_for_good(to_line_m: float, v_mps: float, now_s: float, wait_s: float, since, row, tls: str) -> bool:
+    """Whether a foe (its front ``to_line_m`` before its stop line, at ``v_mps``) stands for good: still
+    (slower than STAND_MPS), not inside the junction (at most STANDING_PAST_LINE_M past its line), and
+    so for ``wait_s`` or more: ``now_s - since(row, tls)`` (``since``: when it came to stand, or when its
+    light last changed if that is later: a car waiting at red sets off at green)."""
+    if v_mps >= STAND_MPS or to_line_m < -STANDING_PAST_LINE_M:
+        return False
+    return now_s - since(row, tls) >= wait_s
 
 
 def waits_its_turn(to_line_m: float, x_m: float, v_mps: float, now_s: float, ego_first_s: float, history, row) -> bool:
@@ -179,10 +211,10 @@ def waits_its_turn(to_line_m: float, x_m: float, v_mps: float, now_s: float, ego
 
 
 def foe_arrival(foes: tuple[FoeLink, ...], signals, lanes: dict[str, list[int]], lane_pos, speed, length,
-                exclude: set[int], skip=None, order=None) -> tuple[float, int]:
+                exclude: set[int], skip=None, order=None, standing=None) -> tuple[float, int]:
     """(earliest arrival time t_f of :func:`foe_arrivals`, s; its row), or (inf, -1); ``skip(t, row,
     x)`` leaves arrivals out (e.g. zipper foes that can give way)."""
-    arr = foe_arrivals(foes, signals, lanes, lane_pos, speed, length, exclude, order)
+    arr = foe_arrivals(foes, signals, lanes, lane_pos, speed, length, exclude, order, standing)
     return min(((t, r) for t, r, x in arr if skip is None or not skip(t, r, x)), default=(math.inf, -1),
                key=lambda a: a[0])
 

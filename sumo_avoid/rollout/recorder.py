@@ -3,7 +3,9 @@
 ``persons.csv``, the same columns), and each road user's SUMO class (:meth:`Recorder.classes`).
 
 Columns: :data:`COLUMNS` (``lane``, ``lane_pos``: where SUMO has the vehicle, its lane id and
-the front bumper's position along it; "" / empty where SUMO has it on no lane). Egos are always recorded; other vehicles only within ``record_radius_m`` of an ego (0 = all), to
+the front bumper's position along it; "" / empty where SUMO has it on no lane), and ``z`` (m, the
+height SUMO gives the road user's position, :mod:`sumo_avoid.core.levels`) after them, only when some
+z is not 0 (a flat net's recording is as before). Egos are always recorded; other vehicles only within ``record_radius_m`` of an ego (0 = all), to
 keep big-traffic runs small. Headings are written wrapped to (-pi, pi]. SUMO's own collision reports are kept beside, one event per pair and
 contact episode (consecutive steps), the same rule as the plug-in's own events.
 """
@@ -57,7 +59,7 @@ class Recorder:
             self._classes.update(zip(ids.tolist(), np.array(snap.vclass, dtype=object)[idx].tolist()))
             chunks.append((step, snap.time_s, ids, snap.is_ego[idx], snap.pos[idx], snap.vel[idx],
                            snap.heading[idx], snap.length[idx], snap.width[idx],
-                           np.array(snap.lane, dtype=object)[idx], snap.lane_pos[idx]))
+                           np.array(snap.lane, dtype=object)[idx], snap.lane_pos[idx], snap.z[idx]))
 
     def record_sumo_collisions(self, step: int, collisions) -> None:
         for c in collisions:
@@ -94,7 +96,8 @@ def _frame(chunks: list[tuple]) -> pd.DataFrame:
     sizes = [len(c[2]) for c in chunks]
     pos = np.concatenate([c[4] for c in chunks])
     vel = np.concatenate([c[5] for c in chunks])
-    return pd.DataFrame({
+    z = np.concatenate([c[11] for c in chunks])
+    table = pd.DataFrame({
         "step": np.repeat([c[0] for c in chunks], sizes).astype(np.int64),
         "time_s": np.repeat([c[1] for c in chunks], sizes),
         "id": np.concatenate([c[2] for c in chunks]).astype(str),
@@ -107,3 +110,6 @@ def _frame(chunks: list[tuple]) -> pd.DataFrame:
         "lane": np.concatenate([c[9] for c in chunks]).astype(str),
         "lane_pos": np.concatenate([c[10] for c in chunks]),
     })
+    if np.any(z != 0.0):  # a net with heights (bridges, tunnels: core.levels); a flat one's table stays as it was
+        table["z"] = z
+    return table

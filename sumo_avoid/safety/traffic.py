@@ -15,7 +15,8 @@ Per ego and step, with s the arc length of the ego's front bumper projected on i
 * **Right of way.** At the next link ahead that must give way now (minor, permissive green,
   equal, roundabout entry, merge; :mod:`sumo_avoid.road.yielding`), the ego is held at its stop
   line by the same braking curve while a vehicle of a foe link with priority would reach the
-  conflict point within the critical gap (plus a margin) after the ego reaches the line; an ego
+  conflict point within the critical gap (plus a margin) after the ego reaches the line (a foe
+  standing at its line for ``standing_foe_wait_s`` does not come: it holds the ego no longer); an ego
   that could stop before the line only braking harder than ``commit_decel_mps2`` goes on, and
   past the line it never stops for a foe (it clears the junction). A zipper merge is taken in
   turn (yielding.zipper_slot).
@@ -51,6 +52,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from sumo_avoid.core.geometry import near_any
 from sumo_avoid.road.polyline import polyline_point_at, polyline_track
 from sumo_avoid.road.regulation import RED, STOP_SIGNS, RulesParams
 from sumo_avoid.core.types import EgoTask, Keys
@@ -124,6 +126,8 @@ class TrafficRulesLayer:
         self._caps = 0
         self._yields: set[tuple[str, float]] = set()  # (ego, stop line s) where the ego gave way
         self._allway = False  # an ego's route crosses an all-way stop: follow who stands since when
+        self._foes = False  # an ego's route has a link with foes: follow who stands since when (foes for good)
+        self._tls_since: dict[str, tuple[str, float]] = {}  # light id -> (its state, since when), s
         self._stand: dict[str, tuple] = {}  # vehicle id -> (start, end (nan: still)) of its last standing run, s
         self._turn_radius_m = float(getattr(ctx, "turn_radius_m", 0.0) or 0.0)  # 0: no drivable line, no wide exits
         self._crossings = CrossingRule(params)  # give way at pedestrian crossings, never stop on one
@@ -135,16 +139,37 @@ class TrafficRulesLayer:
                  or self.p.speed_factor is not None)
         self._egos[task.vid] = _Ego(task, watch, wide=wide)
         self._allway |= any(lk.state == "w" and lk.foes for lk in task.links)
+        self._foes |= any(lk.foes for lk in task.links)
 
     def _track_standing(self, obs) -> None:
-        """When each vehicle came to stand (for the order of arrival at all-way stops)."""
+        """When each vehicle near an ego came to stand (for the order of arrival at all-way stops,
+        and the foes that stand for good), and when each light last changed."""
         snap, t = obs.snapshot, obs.snapshot.time_s
-        for vid, v in zip(snap.ids, snap.speed):
-            start, end = self._stand.get(vid, (math.nan, math.nan))
+        for tls, state in snap.signals.items():
+            if self._tls_since.get(tls, ("",))[0] != state:
+                self._tls_since[tls] = (state, t)
+        # only those within lookahead_m of an ego, as the recording has them (output.record_radius_m,
+        # 300 m) for the metric to judge the same: one farther away is forgotten, its runs unknown
+        near = np.flatnonzero(near_any(snap.pos, snap.pos[obs.ego_rows], self.p.lookahead_m))
+        known, stand = self._stand, {}
+        for vid, v in zip([snap.ids[i] for i in near], snap.speed[near].tolist()):
+            start, end = stand[vid] = known.get(vid, (math.nan, math.nan))
             if v < STAND_MPS and not (start == start and end != end):  # not standing yet: a new run starts
-                self._stand[vid] = (t, math.nan)
+                stand[vid] = (t, math.nan)
             elif v >= STAND_MPS and start == start and end != end:  # standing until now: the run ends
-                self._stand[vid] = (start, t)
+                stand[vid] = (start, t)
+        self._stand = stand
+
+    def _standing_since(self, snap):
+        """since(row, tls) for :func:`~sumo_avoid.road.yielding.stands_for_good`: when the row came to
+        stand (now if it does not stand), or when light ``tls`` last changed if that is later."""
+        t = snap.time_s
+
+        def since(row: int, tls: str) -> float:
+            start, end = self._stand.get(snap.ids[row], (t, t))
+            light = self._tls_since.get(tls, ("", -math.inf))[1] if tls else -math.inf
+            return max(start if end != end else t, light)
+        return since
 
     def remove_ego(self, vid: str) -> None:
         self._egos.pop(vid, None)
@@ -201,7 +226,9 @@ class TrafficRulesLayer:
                 continue  # priority now, or too late to stop: go on
             order = (snap.time_s, e.stopped.get(k, math.inf),  # all-way stops: the ego first stood at its line then
                      lambda r: self._stand.get(snap.ids[r], (math.nan, math.nan)))
-            found = foe_arrivals(link.foes, snap.signals, lanes, snap.lane_pos, snap.speed, snap.length, {row}, order)
+            standing = (snap.time_s, p.standing_foe_wait_s, self._standing_since(snap))
+            found = foe_arrivals(link.foes, snap.signals, lanes, snap.lane_pos, snap.speed, snap.length, {row}, order,
+                                 standing)
             arrivals = [a for a, _, _ in found]
             t_c, t_e = critical_gap_s(link, p), ego_time_to_line(d, v, p.stop_margin_m)
             if link.state == "Z":  # take turns: arrive in the first free slot (yielding.zipper_slot)
@@ -217,7 +244,7 @@ class TrafficRulesLayer:
         snap = obs.snapshot
         out = np.array(command, dtype=float, copy=True)
         lanes = None
-        if self._allway:
+        if self._allway or self._foes:
             self._track_standing(obs)
         for i, vid in enumerate(obs.ego_ids):
             e = self._egos.get(vid)

@@ -94,7 +94,8 @@ def obstacle_vehicles(obs, row: int, q, radius_m: float, walkways=frozenset()):
     of the return) on the carriageway; a person on one of the ``walkways`` (lane ids: sidewalks, walking
     areas) is off it: half walking, none standing (a car passes the people waiting at a corner at their
     size; SUMO puts them at the kerb's edge, inside a tight turn's margin); a radar return is placed on
-    the map by the sensor (``Detections.walkway``) and judged the same way."""
+    the map by the sensor (``Detections.walkway``) and judged the same way. Road users on another level
+    than the ego (:mod:`sumo_avoid.core.levels`: a car on a bridge over it) are left out."""
     snap = obs.snapshot
     if obs.detections is not None:  # one scan per radar mount (front, rear)
         route = obs.route_heading
@@ -103,6 +104,8 @@ def obstacle_vehicles(obs, row: int, q, radius_m: float, walkways=frozenset()):
         return tuple(np.concatenate(x) for x in zip(*parts)) if len(parts) > 1 else parts[0]
     d = np.hypot(*(snap.pos - np.asarray(q, float)).T)
     o = np.flatnonzero((d < radius_m) & (np.arange(snap.n) != row))
+    if snap.levels:  # a road user on another level (over a bridge, in a tunnel) is no obstacle (core.levels)
+        o = o[snap.same_level(row, o)]
     vru = snap.is_person[o] | np.array([snap.vclass[i] in VRU_CLASSES for i in o], bool).reshape(len(o))
     kerb = np.array([snap.is_person[i] and snap.lane[i] in walkways for i in o], bool).reshape(len(o)) \
         if walkways and vru.any() else np.zeros(len(o), bool)

@@ -14,7 +14,9 @@ centres.
 
 Model, per ego and scan:
 
-1. *Candidates*: targets whose centre lies within ``max_range_m`` plus their half-diagonal.
+1. *Candidates*: targets whose centre lies within ``max_range_m`` plus their half-diagonal, on the
+   ego's level (:mod:`sumo_avoid.core.levels`: a car on a bridge over the ego neither returns nor
+   hides anything, the deck is in the way; static obstacles are on every level).
 2. *Angular intervals*: every candidate's vertices are converted to azimuths; the candidate covers
    [min, max] (clipped to the field of view). Targets straddling the rear (span > 180 degrees) or
    containing the sensor are dropped (the field of view is forward, < 180 degrees).
@@ -50,6 +52,7 @@ import numpy as np
 
 from sumo_avoid.core.config import FieldError, field_doc
 from sumo_avoid.core.geometry import wrap_angle
+from sumo_avoid.core.levels import same_level
 from sumo_avoid.core.types import Detections
 from sumo_avoid.sensing import occlusion
 from sumo_avoid.sensing.tracker import Tracker
@@ -208,6 +211,10 @@ class Radar:
         polys, vel, ids, centre, radius = targets(snap, obstacles)
         half = math.radians(p.fov_deg) / 2
         e, n = self._candidates(spos, fwd, centre, radius, rows, p.max_range_m, math.cos(half), math.sin(half))
+        if snap.levels:  # no return from, and no shadow of, a road user on another level (core.levels)
+            vehicle = n < snap.n
+            keep = ~vehicle | same_level(snap.z[rows[e]], snap.z[np.where(vehicle, n, 0)])
+            e, n = e[keep], n[keep]
         ptr = np.concatenate([[0], np.cumsum(np.bincount(e, minlength=len(rows)))]).astype(np.int64)
         ego, tgt, rng, az, vr = self._scan(spos, hd, svel, polys, vel, ptr, n, half, p.max_range_m)
         small = None

@@ -1,7 +1,8 @@
 """The one module that talks to libsumo.
 
 :class:`SumoSim` starts SUMO for a scenario, reads the world once per step into an immutable
-:class:`~sumo_avoid.core.snapshot.Snapshot` (through subscriptions, not per-vehicle getters), applies
+:class:`~sumo_avoid.core.snapshot.Snapshot` (through subscriptions, not per-vehicle getters; positions
+in 3-D, the z for :mod:`sumo_avoid.core.levels`), applies
 the actuator's poses to the egos with ``moveToXY`` (on their route's lanes while they drive on
 them, :mod:`sumo_avoid.sumo.placement`) and advances the simulation.
 
@@ -28,12 +29,14 @@ from sumo_avoid.sumo.inputs import FLOCK_MAX_SPEED_MPS
 from sumo_avoid.sumo.placement import RoutePlacement
 from sumo_avoid.sumo.ssm_device import SsmRequest, equip, ssm_args
 
-_DYNAMIC = (libsumo.constants.VAR_POSITION, libsumo.constants.VAR_ANGLE, libsumo.constants.VAR_SPEED,
+_DYNAMIC = (libsumo.constants.VAR_POSITION3D, libsumo.constants.VAR_ANGLE, libsumo.constants.VAR_SPEED,
             libsumo.constants.VAR_LANE_ID, libsumo.constants.VAR_LANEPOSITION)
-_PERSON = (libsumo.constants.VAR_POSITION, libsumo.constants.VAR_ANGLE, libsumo.constants.VAR_SPEED,
+_PERSON = (libsumo.constants.VAR_POSITION3D, libsumo.constants.VAR_ANGLE, libsumo.constants.VAR_SPEED,
            libsumo.constants.VAR_LANE_ID, libsumo.constants.VAR_LANEPOSITION, libsumo.constants.VAR_VEHICLE)
 _SIM_VARS = (libsumo.constants.VAR_DEPARTED_VEHICLES_IDS, libsumo.constants.VAR_ARRIVED_VEHICLES_IDS,
              libsumo.constants.VAR_DEPARTED_PERSONS_IDS, libsumo.constants.VAR_ARRIVED_PERSONS_IDS)
+#: libsumo gives a vehicle moved off every lane (an arena's flock) a 3-D position without z: z = 0
+_NO_Z = {2: (0.0,), 3: ()}
 EGO_SPEED_MODE = 32  # all of SUMO's speed safety checks off (verified: a commanded crash happens)
 EGO_LANE_CHANGE_MODE = 0  # SUMO changes no lanes for the ego: the plug-in is in charge
 
@@ -172,9 +175,11 @@ class SumoSim:
             return Snapshot.empty(self.time_s, signals)
         rows = res.values() if n == len(key) else [res[v] for v in ids]
         c = libsumo.constants
-        P, A, S, LP = c.VAR_POSITION, c.VAR_ANGLE, c.VAR_SPEED, c.VAR_LANEPOSITION
-        flat = np.fromiter(itertools.chain.from_iterable((*r[P], r[A], r[S], r[LP]) for r in rows), float, 5 * n)
-        flat = flat.reshape(n, 5)  # front bumper x, y, compass angle (deg), speed, lane position
+        P, A, S, LP = c.VAR_POSITION3D, c.VAR_ANGLE, c.VAR_SPEED, c.VAR_LANEPOSITION
+        flat = np.fromiter(itertools.chain.from_iterable((*r[P], *_NO_Z[len(r[P])], r[A], r[S], r[LP]) for r in rows),
+                           float, 6 * n)
+        flat = flat.reshape(n, 6)  # front bumper x, y, z, compass angle (deg), speed, lane position
+        z, flat = flat[:, 2], flat[:, [0, 1, 3, 4, 5]]
         lane = tuple(r[c.VAR_LANE_ID] for r in rows)
         heading = np.radians(90.0 - flat[:, 2])
         direction = np.column_stack([np.cos(heading), np.sin(heading)])
@@ -189,7 +194,8 @@ class SumoSim:
         lane_pos = np.where([bool(x) for x in lane], flat[:, 4], np.nan)
         vel, length, width, person = direction * flat[:, 3:4], dims[:, 0], dims[:, 1], np.zeros(n, bool)
         if persons is not None:
-            p_ids, p_centre, p_vel, p_heading, p_dims, p_lane, p_lane_pos = persons
+            p_ids, p_centre, p_vel, p_heading, p_dims, p_lane, p_lane_pos, p_z = persons
+            z = np.concatenate([z, p_z])
             ids, lane, vclass = ids + p_ids, lane + p_lane, vclass + ("pedestrian",) * len(p_ids)
             centre, vel = np.concatenate([centre, p_centre]), np.concatenate([vel, p_vel])
             heading = np.concatenate([heading, p_heading])
@@ -197,27 +203,29 @@ class SumoSim:
             is_ego, person = np.concatenate([is_ego, np.zeros(len(p_ids), bool)]), np.r_[person, np.ones(len(p_ids), bool)]
             lane_pos = np.concatenate([lane_pos, p_lane_pos])
         return Snapshot(self.time_s, ids, centre, vel, heading, length, width, is_ego, signals=signals, lane=lane,
-                        lane_pos=lane_pos, vclass=vclass, is_person=person)
+                        lane_pos=lane_pos, vclass=vclass, is_person=person, z=z)
 
     def _read_persons(self):
         """The persons outside vehicles: ids, centres, velocities, headings, (length, width), lanes, lane
-        positions; None when there are none. SUMO's person position is taken as the front, like a vehicle's."""
+        positions, heights; None when there are none. SUMO's person position is taken as the front, like a vehicle's."""
         c = libsumo.constants
         res = libsumo.person.getAllSubscriptionResults()
         rows = [(pid, r) for pid, r in res.items() if pid in self._persons and not r[c.VAR_VEHICLE]]
         if not rows:
             return None
         m = len(rows)
-        flat = np.fromiter(itertools.chain.from_iterable((*r[c.VAR_POSITION], r[c.VAR_ANGLE], r[c.VAR_SPEED],
-                                                          r[c.VAR_LANEPOSITION]) for _, r in rows), float, 5 * m)
-        flat = flat.reshape(m, 5)
+        P = c.VAR_POSITION3D
+        flat = np.fromiter(itertools.chain.from_iterable((*r[P], *_NO_Z[len(r[P])], r[c.VAR_ANGLE], r[c.VAR_SPEED],
+                                                          r[c.VAR_LANEPOSITION]) for _, r in rows), float, 6 * m)
+        flat = flat.reshape(m, 6)
+        z, flat = flat[:, 2], flat[:, [0, 1, 3, 4, 5]]
         p_ids = tuple(pid for pid, _ in rows)
         dims = np.array([self._persons[pid] for pid in p_ids], float).reshape(m, 2)
         heading = np.radians(90.0 - flat[:, 2])
         direction = np.column_stack([np.cos(heading), np.sin(heading)])
         lane = tuple(r[c.VAR_LANE_ID] for _, r in rows)
         return (p_ids, flat[:, :2] - direction * (dims[:, :1] / 2.0), direction * flat[:, 3:4], heading, dims, lane,
-                np.where([bool(x) for x in lane], flat[:, 4], np.nan))
+                np.where([bool(x) for x in lane], flat[:, 4], np.nan), z)
 
     @staticmethod
     def _signals() -> dict[str, str]:

@@ -8,6 +8,7 @@ import numpy as np
 
 from sumo_avoid.control.formation import field as ff
 from sumo_avoid.core.geometry import footprint_corners, pad_polygons
+from sumo_avoid.core.levels import same_level
 from sumo_avoid.core.types import Observation
 from sumo_avoid.sensing.perception import radar_obstacles
 
@@ -59,6 +60,8 @@ class ObstacleLists:
             o = np.array([k for k, v in enumerate(snap.ids) if v not in members], int)
             if len(o):
                 k = np.hypot(*(snap.pos[o][None] - where[:, None]).transpose(2, 0, 1)) <= r
+                if snap.levels:  # on another level (a bridge over the member): no obstacle (core.levels)
+                    k &= same_level(snap.z[obs.ego_rows][:, None], snap.z[o][None])
                 o, k = o[k.any(axis=0)], k[:, k.any(axis=0)]
                 ahead = self.p.predict_s * snap.vel[o]  # each as the box it sweeps within predict_s
                 parts.append(footprint_corners(snap.pos[o] + 0.5 * ahead, snap.heading[o],
