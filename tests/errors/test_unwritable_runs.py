@@ -48,7 +48,10 @@ def test_run_whose_out_folder_vanishes(tmp_path):
     out = tmp_path / "gone" / "out"
     r = cli("run", OVERTAKING, *SHORT, "--no-plots", "--out", out, cwd=tmp_path,
             during=when_made(out, remove(tmp_path / "gone")))
-    one_line(r, f"cannot write {out / 'metrics.json'}: {GONE}")
+    # gone while the run writes, or (on a busy machine) already before run checked --out: either way one line
+    # naming the folder and why (a clean-clone run with the capped numpy dispatch lost the race the second way)
+    line = one_line(r, out, GONE)
+    assert f"cannot write {out / 'metrics.json'}: {GONE}" in line or "key '--out'" in line, line
     assert not (tmp_path / "gone").exists()
 
 
