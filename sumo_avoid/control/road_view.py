@@ -20,7 +20,7 @@ import numpy as np
 
 from sumo_avoid.road.drivable import NONE, drivable_line
 from sumo_avoid.road.frenet import RouteFrame
-from sumo_avoid.road.gaps import GAP_MIN_M, lane_blockers
+from sumo_avoid.road.gaps import GAP_MIN_M, lane_blockers, lane_change_length_m
 from sumo_avoid.core.geometry import wrap_angle
 from sumo_avoid.road.route_lanes import RouteLanes
 from sumo_avoid.road.polyline import arc_lengths
@@ -87,6 +87,7 @@ class RoadView:
         self.line = (drivable_line(self.frame, self.lanes.corridor, 0.5 * task.width_m, turn_radius_m)
                      if self.lanes is not None else NONE)
         self.yaw_rate_radps = yaw_rate_radps
+        self.turn_radius_m = turn_radius_m
         self._room = 0.5 * task.width_m + LINE_CLEAR_M
         self._line_frame = None  # the line's own frame and its arc length at the line's grid, for its curvature
         if len(self.line.s):
@@ -153,7 +154,8 @@ class RoadView:
         route), the lateral offset to follow (at the carrot, ``ahead_m`` ahead) and a speed limit,
         m/s, called once per step (``step_s``). (0, inf): follow the path into the next lane towards
         the route's, which is free beside the ego (:func:`~sumo_avoid.road.gaps.lane_blockers`: the
-        secure gap to whatever it senses behind and ahead in that lane). Otherwise the ego keeps to
+        secure gap to whatever it senses behind and ahead in that lane, and ahead the room the move
+        takes at the car's turning radius). Otherwise the ego keeps to
         the centre of the lane it is in, drops back behind a car in the target lane that blocks it
         from ahead or alongside (``DROP_BACK_MPS`` below its speed: riding beside it, the gap never
         opens), and, at ``decel_mps2``, stops before its lane tapers off
@@ -182,7 +184,9 @@ class RoadView:
         nxt = own + step
         band = (centres[nxt] - 0.5 * piece.widths_m[nxt], centres[nxt] + 0.5 * piece.widths_m[nxt])
         o_vs = sc.o_vel[:, 0]
-        block = lane_blockers(sc.s, float(sc.vel[0]), sc.length, sc.o_pos, sc.o_length, sc.o_width, o_vs, band)
+        move = lane_change_length_m(centres[nxt] - sc.d, self.turn_radius_m)
+        block = lane_blockers(sc.s, float(sc.vel[0]), sc.length, sc.o_pos, sc.o_length, sc.o_width, o_vs, band,
+                              move_m=move)
         ds = sc.o_pos[:, 0] - sc.s
         alongside = block & (np.abs(ds) < 0.5 * (sc.length + sc.o_length) + GAP_MIN_M)
         held = self._held_free_s is not None

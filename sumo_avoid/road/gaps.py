@@ -29,6 +29,18 @@ def secure_gap_m(v_behind, v_ahead, react_s: float = GAP_REACT_S, decel_mps2: fl
     return np.maximum(vb * react_s + (vb * vb - va * va) / (2.0 * decel_mps2), 0.0)
 
 
+def lane_change_length_m(shift_m: float, turn_radius_m: float) -> float:
+    """The shortest distance along the road in which a car turning at most at ``turn_radius_m``
+    moves ``shift_m`` across it and is straight again: two opposite arcs of angle a, across
+    2R(1 - cos a) = shift, along 2R sin a (at shift >= 2R: 2R, the arcs' largest reach). 0 without a
+    radius."""
+    shift = abs(float(shift_m))
+    if not turn_radius_m > 0.0 or shift == 0.0:
+        return 0.0
+    cos_a = max(1.0 - shift / (2.0 * turn_radius_m), 0.0)
+    return 2.0 * turn_radius_m * float(np.sqrt(1.0 - cos_a * cos_a))
+
+
 def in_band(o_d, o_wid, band: tuple[float, float]) -> np.ndarray:
     """(O,) which vehicles (centres at d = ``o_d``, widths ``o_wid``) overlap the lane across [band]
     by more than LANE_OVERLAP_M."""
@@ -37,13 +49,16 @@ def in_band(o_d, o_wid, band: tuple[float, float]) -> np.ndarray:
 
 
 def lane_blockers(s: float, speed: float, length: float, o_pos, o_len, o_wid, o_vs, band: tuple[float, float],
-                  member=None) -> np.ndarray:
+                  member=None, move_m: float = 0.0) -> np.ndarray:
     """(O,) the vehicles that keep a car at arc length s (its ``length``, ``speed`` along the road)
     from moving into the lane across [band] (d, m): those overlapping that band (:func:`in_band`)
     nearer, bumper to bumper, than GAP_MIN_M plus, for a connected vehicle (``member`` (O,) True;
     it knows the plan), GAP_HEADWAY_S x the closing speed, and for any other vehicle the secure gap
     (:func:`secure_gap_m`) of whichever of the two is behind: a car coming up fast from behind must
-    be able to brake for the car that moved in, even if that one then brakes too."""
+    be able to brake for the car that moved in, even if that one then brakes too. A vehicle ahead
+    also needs the room the move itself takes (``move_m``, :func:`lane_change_length_m`) for the part
+    of it the car closes on it (1 - its speed / the car's, at least 0): a car that starts a change
+    towards a standing car it cannot finish before stops across the two lanes."""
     o_pos = np.asarray(o_pos, float).reshape(-1, 2)
     if not len(o_pos):
         return np.zeros(0, bool)
@@ -53,11 +68,13 @@ def lane_blockers(s: float, speed: float, length: float, o_pos, o_len, o_wid, o_
     ahead = o_pos[:, 0] >= s
     close = np.where(ahead, speed - o_vs, o_vs - speed)
     secure = np.where(ahead, secure_gap_m(speed, o_vs), secure_gap_m(o_vs, speed))
-    room = GAP_MIN_M + np.where(member, GAP_HEADWAY_S * np.maximum(close, 0.0), secure) + 0.5 * (length + o_len)
+    closes = np.clip(1.0 - o_vs / max(speed, 0.1), 0.0, 1.0)
+    room = (GAP_MIN_M + np.where(member, GAP_HEADWAY_S * np.maximum(close, 0.0), secure) + 0.5 * (length + o_len)
+            + np.where(ahead, move_m * closes, 0.0))
     return inside & (np.abs(o_pos[:, 0] - s) < room)
 
 
 def lane_is_free(s: float, speed: float, length: float, o_pos, o_len, o_wid, o_vs, band: tuple[float, float],
-                 member=None) -> bool:
+                 member=None, move_m: float = 0.0) -> bool:
     """Whether a car at arc length s may move into the lane across [band]: no :func:`lane_blockers`."""
-    return not lane_blockers(s, speed, length, o_pos, o_len, o_wid, o_vs, band, member).any()
+    return not lane_blockers(s, speed, length, o_pos, o_len, o_wid, o_vs, band, member, move_m).any()

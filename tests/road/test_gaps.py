@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sumo_avoid.road.gaps import lane_blockers, lane_is_free, secure_gap_m
+from sumo_avoid.road.gaps import lane_blockers, lane_change_length_m, lane_is_free, secure_gap_m
 
 
 def test_secure_gap_by_hand():
@@ -40,3 +40,28 @@ def test_lane_blockers_are_the_vehicles_lane_is_free_counts():
     got = lane_blockers(100.0, 20.0, 4.5, pos, np.full(4, 4.5), np.full(4, 1.8), np.array([20.0, 20.0, 25.0, 25.0]), band)
     assert got.tolist() == [True, False, True, False]
     assert lane_blockers(100.0, 20.0, 4.5, np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0), band).shape == (0,)
+
+
+def test_lane_change_length_by_hand():
+    # R 4.25 m: a shift of R (2 - sqrt 2) takes two 45 deg arcs, 2R sin 45 = R sqrt 2 along the road;
+    # a shift of 2R two quarter circles, 2R; more cannot be had in less than 2R; no radius, no length
+    assert lane_change_length_m(4.25 * (2.0 - np.sqrt(2.0)), 4.25) == pytest.approx(4.25 * np.sqrt(2.0), rel=1e-12)
+    assert lane_change_length_m(-8.5, 4.25) == pytest.approx(8.5, rel=1e-12)
+    assert lane_change_length_m(12.0, 4.25) == pytest.approx(8.5, rel=1e-12)
+    assert lane_change_length_m(3.2, 0.0) == 0.0 and lane_change_length_m(0.0, 4.25) == 0.0
+
+
+def test_a_standing_car_ahead_in_the_lane_needs_the_room_the_move_takes():
+    # Bologna: the ego standing, a car standing in the next lane 13 m ahead (centres): room 3 + 0 + 5 = 8
+    # without the move; the move of 6.01 m at R 4.25 m (shift 2.49 m) makes it 14.01 > 13: blocked
+    band, one = (1.75, 5.25), (np.array([5.0]), np.array([1.8]))
+    move = lane_change_length_m(4.25 * (2.0 - np.sqrt(2.0)), 4.25)
+    assert lane_is_free(100.0, 0.0, 5.0, [[113.0, 3.5]], *one, np.array([0.0]), band)
+    assert not lane_is_free(100.0, 0.0, 5.0, [[113.0, 3.5]], *one, np.array([0.0]), band, move_m=move)
+    assert lane_is_free(100.0, 0.0, 5.0, [[114.1, 3.5]], *one, np.array([0.0]), band, move_m=move)
+    # one driving away at least as fast as the ego is not closed on during the move: the room as before
+    # (ego 10 m/s, it 10 m/s: 3 + 10 x 1 (secure gap) + 5 = 18 m)
+    assert lane_is_free(100.0, 10.0, 5.0, [[118.5, 3.5]], *one, np.array([10.0]), band, move_m=move)
+    assert not lane_is_free(100.0, 10.0, 5.0, [[117.5, 3.5]], *one, np.array([10.0]), band, move_m=move)
+    # ... one behind never needs it (a car 9 m behind at 0 m/s, the ego at 0: 3 + 0 + 5 = 8 < 9)
+    assert lane_is_free(100.0, 0.0, 5.0, [[91.0, 3.5]], *one, np.array([0.0]), band, move_m=move)

@@ -35,6 +35,7 @@ from sumo_avoid.control.road_view import FrenetScene, RoadView
 from sumo_avoid.core.config import FieldError, field_doc
 from sumo_avoid.core.geometry import footprint_corners
 from sumo_avoid.core.types import EgoTask, Keys, Observation
+from sumo_avoid.road.gaps import lane_change_length_m
 
 
 @dataclass(frozen=True)
@@ -165,14 +166,17 @@ class ApfSaController(BaseController):
             if (st.escape_offset is None and window_full and slow and stuck_now and
                     (t >= st.cooldown_until_s or (view.passing is not None and st.pass_checked_s == t))):
                 end = self._anneal(view, sc, target)
+                offset = None if end is None else self._inside_offset(view, sc, end)
                 if end is None:
                     self.failed_searches += 1
                     st.cooldown_until_s = t + min(p.trap_window_s * 2.0**st.failures, p.sa_backoff_max_s)
                     st.failures += 1
+                elif not self._room_to_escape(sc, offset, sees_behind):
+                    st.cooldown_until_s = t + p.trap_window_s  # no room to move across yet: wait in the lane
                 else:
                     self.escapes += 1
                     st.failures = 0
-                    st.escape_offset = self._inside_offset(view, sc, end)
+                    st.escape_offset = offset
                     st.escape_start_s = st.escape_clock_s = t
                     st.held_since_s, st.escape_err_m = None, math.inf
                     target = drv.carrot(view, sc, st.escape_offset)
@@ -217,6 +221,18 @@ class ApfSaController(BaseController):
             # would once it is), so the pass then needs only its own time (sees behind: may back up)
             sees_behind = obs.detections is None or any(d.mount == "rear" for d in obs.detections)
             st.pass_ready = sees_behind and self.passer.candidate(vid, view, sc, t, task) is not None
+
+    def _room_to_escape(self, sc: FrenetScene, offset: float, sees_behind: bool) -> bool:
+        """May an escape towards ``offset`` (d) start? Where the room ahead in the ego's lane holds
+        the move across (:func:`~sumo_avoid.road.gaps.lane_change_length_m` at the car's turning
+        radius, plus ``gov_standstill_m``), or, standing, where it can back up for that room (it sees
+        behind and nothing is there). A car that swerves towards a free lane while it brakes for a
+        queue it cannot clear stops across two lanes, and with a front radar alone it cannot back out
+        of it (Bologna: 22 s standing askew, passing cars clipping its rear)."""
+        need = lane_change_length_m(offset - sc.d, self.driver.steering[0]) + self.p.apf.gov_standstill_m
+        if self._room_ahead(sc, heading=0.0) >= need:
+            return True
+        return float(np.hypot(*sc.vel)) < 0.3 and sees_behind and self._clear_behind(sc)
 
     def _pass_reach(self, view: RoadView, sc: FrenetScene, st: _EgoState) -> float:
         """How far ahead the carrot may lie: while a pass moves the ego out behind the blocker, half the
