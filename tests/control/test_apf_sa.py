@@ -76,6 +76,29 @@ def test_backing_up_waits_for_the_traffic_behind(ctl):
     assert ctl._clear_behind(_scene_behind(2.0, 5.0, d_o=3.5))
 
 
+def _scene_ahead(gap_m, ego_speed_mps):
+    import numpy as np
+
+    from sumo_avoid.control.road_view import FrenetScene
+
+    return FrenetScene(100.0, 0.0, 0.0, np.array([ego_speed_mps, 0.0]), 4.5, 1.8,
+                       np.array([[100.0 + 4.5 + gap_m, 0.0]]), np.zeros(1), np.array([4.5]), np.array([1.8]),
+                       np.zeros((1, 2)), lambda s: (np.full(len(s), -5.0), np.full(len(s), 5.0)))
+
+
+def test_an_escape_starts_only_with_room_for_the_move_across():
+    # turning radius 4.25 m, standstill gap 2 m, a car standing 6.5 m (bumper to bumper) ahead in the lane.
+    # A shift of 1 m takes two arcs with 1 - cos a = 2/17, sin a = 8/17: 8.5 x 8/17 = 4 m, + 2 = 6 <= 6.5;
+    # a lane's 3.2 m takes 8.5 x sqrt(1 - (1 - 3.2/8.5)^2) = 6.645 m, + 2 = 8.645 > 6.5
+    ctl = ApfSaController(ApfSaParams(), Context(seed=1, step_s=0.1, turn_radius_m=4.25))
+    moving, standing = _scene_ahead(6.5, 5.0), _scene_ahead(6.5, 0.0)
+    assert ctl._room_to_escape(moving, 1.0, sees_behind=False)
+    assert not ctl._room_to_escape(moving, 3.2, sees_behind=True)  # braking for it: no swerve it cannot finish
+    assert ctl._room_to_escape(standing, 3.2, sees_behind=True)  # standing, it backs up for the room first
+    assert not ctl._room_to_escape(standing, -3.2, sees_behind=False)  # a front radar alone: it waits aligned
+    assert ctl._room_to_escape(_scene_ahead(8.7, 5.0), 3.2, sees_behind=False)
+
+
 def test_the_field_keys_sit_in_the_apf_sa_table_itself_and_reach_its_driver():
     """ApfSaParams holds ApfParams as an inline field: [controllers.apf_sa] takes APF's keys beside
     its own (no sub-table), they are documented under controllers.apf_sa, and the APF driver it
