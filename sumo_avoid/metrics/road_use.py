@@ -55,16 +55,21 @@ def ego_segments(traj: pd.DataFrame, egos: EgoRows | None = None, with_ids: bool
 
 
 def forbidden(road, mid: np.ndarray, vclass: np.ndarray) -> np.ndarray:
-    """(K,) True where a midpoint lies in a normal lane (outside every junction shape) that the net
-    does not open to the class of its ego (SUMO's ``allow``/``disallow``, :attr:`Road.elements`)."""
+    """(K,) True where a midpoint lies in a normal lane (outside every junction shape) and *every*
+    normal lane holding it is closed by the net to the class of its ego (SUMO's ``allow``/``disallow``,
+    :attr:`Road.elements`). Where a net lays two lanes over each other (a street-running tram's track
+    on the car lane, Braunschweig), a car in its own lane is not on the track's lane."""
     if not len(mid):
         return np.zeros(0, bool)
-    lane, _ = road.lanes.lane_at(mid)
-    inside = (lane >= 0) & ~road.lanes.in_junction(mid)
-    lanes = road.elements.lanes
-    ids = road.lanes.ids
-    return np.array([bool(ok) and vc not in lanes[ids[k]].allow if vc else False
-                     for k, ok, vc in zip(lane, inside, vclass)], bool)
+    p, q = road.lanes.holding(mid)
+    lanes, ids = road.elements.lanes, road.lanes.ids
+    vclass = np.asarray(vclass, dtype=object)
+    open_ = np.array([bool(vclass[i]) and vclass[i] in lanes[ids[k]].allow for i, k in zip(p, q)], bool)
+    held, fine = np.zeros(len(mid), bool), np.zeros(len(mid), bool)
+    held[p] = True
+    fine[p[open_]] = True
+    classed = np.array([bool(v) for v in vclass], bool)
+    return held & ~fine & classed & ~road.lanes.in_junction(mid)
 
 
 def road_use(run: RunResult) -> dict:

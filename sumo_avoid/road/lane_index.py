@@ -72,6 +72,13 @@ class LaneIndex:
         direction[p] = self._directions(geoms, p, q)
         return lane, direction
 
+    def holding(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """(M,2) points -> every (point, lane) pair where lane :attr:`ids` [q] holds point [p]: (K,), (K,)."""
+        pts = np.asarray(points, float).reshape(-1, 2)
+        if not len(pts) or not len(self._lines):
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        return self._tree.query(shapely.points(pts), predicate="intersects")
+
     def _directions(self, geoms, p, q) -> np.ndarray:
         """(K,2) unit direction of lane q[k]'s centre line where point geoms[p[k]] projects on it."""
         lines = self._lines[q]
@@ -94,7 +101,7 @@ class LaneIndex:
         if not len(pts) or not len(self._lines):
             return out
         geoms = shapely.points(pts)
-        p, q = self._tree.query(geoms, predicate="intersects")
+        p, q = self.holding(pts)
         if not len(p):
             return out
         agree = np.einsum("ij,ij->i", self._directions(geoms, p, q), mv[p]) >= 0.0

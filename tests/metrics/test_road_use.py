@@ -84,3 +84,28 @@ def test_real_run_a_blind_ego_backing_up_a_one_way_road():
     assert m["off_road_m"] == pytest.approx(length[~inside].sum(), abs=0.5)
     moving_west = e[(e["x"].diff().shift(-1) < -0.1) & (e["x"] > 5.0)]  # (off the net SUMO says 0 m/s)
     assert len(moving_west) > 50 and (moving_west["vx"] < 0).mean() > 0.9
+
+
+def test_a_car_in_its_lane_under_a_tram_track_is_on_no_forbidden_lane(tmp_path):
+    # netconvert lays a street (bike lane street_0, car lane street_1) and a tram track the other way over
+    # the car lane (Braunschweig's net has such tracks). A car driving east along the track's centre line
+    # is in its car lane and on the track (whose centre line is the nearer): not on a forbidden lane, not
+    # against the traffic; along the bike lane's centre it is on a forbidden lane (not as a bicycle)
+    import sumolib
+    from conftest import netconvert
+
+    from sumo_avoid.metrics.road_use import forbidden
+
+    net_file = netconvert("tram_street", tmp_path, "tram_street")
+    net = sumolib.net.readNet(str(net_file))
+    y = {k: net.getLane(k).getShape()[0][1] for k in ("street_0", "street_1", "tram_0")}
+    assert abs(y["tram_0"] - y["street_1"]) < 0.5 * net.getLane("street_1").getWidth()  # the track runs in the car lane
+    road = Road.from_net_file(net_file)
+    xs = np.arange(50.0, 151.0)
+    on_track = np.column_stack([xs, np.full(len(xs), y["tram_0"])])
+    in_bike_lane = np.column_stack([xs, np.full(len(xs), y["street_0"])])
+    cars = np.full(len(xs), "passenger", dtype=object)
+    assert not forbidden(road, on_track, cars).any()
+    assert forbidden(road, in_bike_lane, cars).all()
+    assert not forbidden(road, in_bike_lane, np.full(len(xs), "bicycle", dtype=object)).any()
+    assert not road.lanes.against(on_track, np.tile([1.0, 0.0], (len(xs), 1))).any()
