@@ -99,26 +99,6 @@ def test_a_field_that_pushes_back_reverses_a_standing_car_only_where_it_may():
     assert forward[0] > 0.0 and forward[1] == 0.0
 
 
-def test_a_car_about_to_stop_steers_no_further_off_the_road_than_it_can_straighten_out():
-    # turning radius 4.25 m, governor braking 4 m/s^2. A field pulling 45 deg to the left:
-    # v_safe 2 m/s leaves 2^2 / (2 x 4) = 0.5 m before the stop, in which an arc of 4.25 m radius
-    # turns 0.5 / 4.25 = 0.117647 rad: the course is held there (Bologna: 19 deg across two lanes)
-    from sumo_avoid.control.apf.apf import ApfDriver, ApfParams, Field
-    from sumo_avoid.core.interfaces import Context
-
-    ctl = ApfDriver(ApfParams(max_lat_speed_mps=10.0), Context(seed=1, step_s=0.1, turn_radius_m=4.25))
-    slow = ctl.velocity(Field(np.zeros(1), np.array([[20.0, 20.0]]), 2.0), 13.89)
-    assert np.hypot(*slow) == pytest.approx(2.0)
-    assert np.arctan2(slow[1], slow[0]) == pytest.approx(0.5 / 4.25, rel=1e-12)
-    # v_safe 6 m/s: 4.5 m of room, 1.06 rad > 35 deg: max_course_deg holds as before
-    free = ctl.velocity(Field(np.zeros(1), np.array([[20.0, 20.0]]), 6.0), 13.89)
-    assert np.arctan2(free[1], free[0]) == pytest.approx(np.radians(35.0), rel=1e-12)
-    # nothing ahead (v_safe inf) or no turning radius known: max_course_deg alone
-    assert np.arctan2(*ctl.velocity(Field(np.zeros(1), np.array([[20.0, 20.0]]), np.inf), 13.89)[::-1]) == pytest.approx(np.radians(35.0))
-    bare = ApfDriver(ApfParams(max_lat_speed_mps=10.0), Context(seed=1, step_s=0.1))
-    assert np.arctan2(*bare.velocity(Field(np.zeros(1), np.array([[20.0, 20.0]]), 2.0), 13.89)[::-1]) == pytest.approx(np.radians(35.0))
-
-
 @pytest.mark.parametrize("beside_m, o_speed", [(-1.8, 0.0), (1.8, 0.0), (-1.8, 6.0)])
 def test_what_is_nearest_to_the_rear_half_does_not_steer_the_ego(beside_m, o_speed):
     # a car moves sideways only by turning about its centre, which swings its rear half the other way:

@@ -294,24 +294,10 @@ class ApfDriver:
             return speed * np.array([np.cos(course), np.sin(course)])
         # a car going forward steers at most max_course off the road's direction and moves across
         # it at most at max_lat_speed: a wall a corner touches must not turn it sideways
-        lim = self.course_limit(fld.v_safe)
-        course = np.clip(course, -lim, lim)
+        course = np.clip(course, -self.max_course, self.max_course)
         v = speed * np.array([np.cos(course), np.sin(course)])
         v[1] = np.clip(v[1], -self.p.max_lat_speed_mps, self.p.max_lat_speed_mps)
         return v
-
-    def course_limit(self, v_safe: float) -> float:
-        """The largest angle to the road's direction the ego may steer to going forward, rad:
-        ``max_course_deg``, and no more than it can take out again, turning at its smallest radius R,
-        in the distance it still has before the governor stops it (``v_safe**2 / (2 gov_decel)``):
-        an arc of R x angle. A car that stops must stop aligned with its lane: one that swerved as
-        it braked stood across two lanes, its rear in the next one, and passing cars clipped its
-        corner (Bologna, SUMO saw none of it: for SUMO the two are on different lanes)."""
-        radius = self.steering[0]
-        if not (radius > 0.0 and np.isfinite(v_safe)):
-            return self.max_course
-        room = v_safe**2 / (2.0 * self.p.gov_decel_mps2)
-        return min(self.max_course, room / radius)
 
     def road_speed(self, view: RoadView, sc: FrenetScene) -> float:
         return view.curve_speed(sc.s, self.p.curve_lat_accel_mps2, self.p.curve_decel_mps2)
