@@ -9,14 +9,11 @@ the same road as 16 edges of 250 m, nets/highway_segments.net.xml), all inserted
 11.5 m apart in every lane, at 8 m/s; every (vehicles/egos)-th one (from 400 m before the road end
 back) is an ego. Same route file, seed and SUMO options on both sides:
 
-* ``plain_s``: SUMO drives everybody, and every step each ego is moved by ``moveToXY`` (its edge and lane
-  as hints, ``keepRoute=1``) + ``setPreviousSpeed`` to where its own speed takes it along its heading
-  (speed mode 32, lane-change mode 0, as the plug-in's egos): the same moveToXY work as the plug-in
-  side, whose cost in SUMO's step (its collision check of the moved vehicles' lanes, docs/radar.md) is
-  then on both sides. ``--plain sumo``: the old plain side, libsumo.simulationStep() only (SUMO moves the
-  egos itself); ``--plain moved_ssm``: moved, and SUMO runs with the SSM device on the egos as the
-  plug-in's run does (its TTC / DRAC / PET measurement, ``sumo_avoid/sumo/ssm_device.py``), so the
-  ratio leaves out what that measurement costs SUMO.
+* ``plain_s``: SUMO drives everybody, and each step every ego is moved by ``moveToXY`` (edge and lane as
+  hints, ``keepRoute=1``) + ``setPreviousSpeed`` where its speed takes it along its heading (speed mode 32,
+  lane-change mode 0): the plug-in side's moveToXY work and its cost in SUMO's step (docs/radar.md).
+  ``--plain sumo``: the old plain side, simulationStep() only; ``--plain moved_ssm``: moved, and SUMO's SSM
+  device on the egos as in the plug-in's run (``sumo_avoid/sumo/ssm_device.py``), its cost left out.
 * ``plugin_s``: runner.run() with ``ego.sensor = "radar"``, ``ego.layers = ["traffic", "danger_time"]`` and the
   given controller (default ``scripted``: constant speed, so the time is the plug-in's machinery
   (snapshot, radar, tracker, danger-time layer, actuator, moveToXY, recorder) rather than a
