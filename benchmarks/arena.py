@@ -12,6 +12,8 @@ wall time, every wall time, and the best CPU time (process_time; on a busy machi
 also counts the other processes); ``flocking metrics`` = order.flocking_metrics() alone (SPEC
 §1.1-1.2 order parameters and μ), timed again on the same table after it.
 Also times the controller's neighbour search, dense distance matrix vs scipy cKDTree, by N.
+The line before the last: the plug-in's own cost per ego-step, (wall_s - plain_s) / (steps x N), in us
+(``--agents 1000 --duration 60``: the issue's figure at 1,000 egos).
 Last line: ``wall_s=X plain_s=Y ratio=Z``.
 """
 from __future__ import annotations
@@ -106,6 +108,8 @@ def main() -> None:
           f"(part of the metrics {metrics_s:.2f} s); mu {f['mu']:.3f}, "
           f"{'same' if f['mu'] == m['mu'] else 'NOT the same'}")
     p = plain(scn)
+    own_us = 1e6 * (wall - p) / max(res.steps * a.agents, 1)
+    print(f"plug-in's own cost (wall_s - plain_s) per ego-step: {own_us:.1f} us at {a.agents} egos, {res.steps} steps")
     print(f"wall_s={wall:.2f} plain_s={p:.2f} ratio={wall / p:.2f}")
 
 

@@ -9,7 +9,11 @@ the same road as 16 edges of 250 m, nets/highway_segments.net.xml), all inserted
 11.5 m apart in every lane, at 8 m/s; every (vehicles/egos)-th one (from 400 m before the road end
 back) is an ego. Same route file, seed and SUMO options on both sides:
 
-* ``plain_s``: SUMO alone drives everybody (egos too): libsumo.simulationStep() only.
+* ``plain_s``: SUMO drives everybody, and each step every ego is moved by ``moveToXY`` (edge and lane as
+  hints, ``keepRoute=1``) + ``setPreviousSpeed`` where its speed takes it along its heading (speed mode 32,
+  lane-change mode 0): the plug-in side's moveToXY work and its cost in SUMO's step (docs/radar.md).
+  ``--plain sumo``: the old plain side, simulationStep() only; ``--plain moved_ssm``: moved, and SUMO's SSM
+  device on the egos as in the plug-in's run (``sumo_avoid/sumo/ssm_device.py``), its cost left out.
 * ``plugin_s``: runner.run() with ``ego.sensor = "radar"``, ``ego.layers = ["traffic", "danger_time"]`` and the
   given controller (default ``scripted``: constant speed, so the time is the plug-in's machinery
   (snapshot, radar, tracker, danger-time layer, actuator, moveToXY, recorder) rather than a
@@ -42,6 +46,7 @@ import argparse
 import contextlib
 import cProfile
 import io
+import math
 import multiprocessing as mp
 import os
 import pathlib
@@ -193,15 +198,38 @@ def instrumented(turns: Turns | None):
         libsumo.start, libsumo.simulationStep, libsumo.close = orig
 
 
-def start_sumo(scn) -> None:
-    """Start plain SUMO with the scenario's options, exactly as runner.run does (sim.sumo_args)."""
+def start_sumo(scn, ssm_dir: pathlib.Path | None = None) -> None:
+    """Start plain SUMO with the scenario's options, exactly as runner.run does (sim.sumo_args); ``ssm_dir``:
+    with SUMO's SSM device on the egos as well, its file there (the plug-in's runs measure with it)."""
     import libsumo
 
     from sumo_avoid.sumo.sim import sumo_args
+    from sumo_avoid.sumo.ssm_device import SsmRequest
 
     spec = scn.spec
+    ssm = SsmRequest(tuple(spec.ego.ids), ssm_dir / "ssm.xml") if ssm_dir is not None else None
     libsumo.start(sumo_args(scn.net_file, scn.route_files, scn.additional_files, spec.sim.step_s, spec.sim.seed,
-                            spec.sim.lateral_resolution_m, None, sumo_collisions=spec.sim.sumo_collisions))
+                            spec.sim.lateral_resolution_m, None, sumo_collisions=spec.sim.sumo_collisions, ssm=ssm))
+
+
+def move_egos(ids, step_s: float, first: bool) -> None:
+    """The plain side's moveToXY work: each ego moved where its speed takes it along its heading, on its lane."""
+    import libsumo
+
+    c = libsumo.constants
+    if first:
+        for vid in ids:
+            libsumo.vehicle.subscribe(vid, [c.VAR_POSITION, c.VAR_ANGLE, c.VAR_SPEED, c.VAR_ROAD_ID, c.VAR_LANE_INDEX])
+            libsumo.vehicle.setSpeedMode(vid, 32)
+            libsumo.vehicle.setLaneChangeMode(vid, 0)
+    res = libsumo.vehicle.getAllSubscriptionResults()
+    for vid in ids:
+        r = res[vid]
+        (x, y), a, v = r[c.VAR_POSITION], r[c.VAR_ANGLE], r[c.VAR_SPEED]
+        h = math.radians(a)
+        libsumo.vehicle.moveToXY(vid, r[c.VAR_ROAD_ID], r[c.VAR_LANE_INDEX], x + v * step_s * math.sin(h),
+                                 y + v * step_s * math.cos(h), angle=a, keepRoute=1)
+        libsumo.vehicle.setPreviousSpeed(vid, v)
 
 
 def busy_s(t: dict, turns: Turns | None) -> float:
@@ -221,10 +249,13 @@ def side(which: str, toml: str, turns: Turns | None, profile: bool = False) -> d
     spec = scn.spec
     out = {}
     with instrumented(turns) as t:
-        if which == "plain":
-            start_sumo(scn)
+        if which.startswith("plain"):
+            tmp = tempfile.TemporaryDirectory() if which == "plain_ssm" else None
+            start_sumo(scn, pathlib.Path(tmp.name) if tmp else None)
             try:
-                for _ in range(int(round(spec.sim.duration_s / spec.sim.step_s))):  # as many as runner.run
+                for k in range(int(round(spec.sim.duration_s / spec.sim.step_s))):  # as many as runner.run
+                    if which != "plain_sumo" and k:
+                        move_egos(spec.ego.ids, spec.sim.step_s, k == 1)
                     libsumo.simulationStep()
             finally:
                 libsumo.close()
@@ -328,8 +359,12 @@ def main(argv=None) -> None:
     ap.add_argument("--sequential", action="store_true", help="the old way: one after the other in this process")
     ap.add_argument("--repeat", type=int, default=3, help="--sequential: alternate N times, keep each's minimum")
     ap.add_argument("--no-sumo-collisions", action="store_true", help="SUMO's own collision check off on both sides")
+    ap.add_argument("--plain", choices=("moved", "sumo", "moved_ssm"), default="moved",
+                    help="moved: the plain side moves the egos by moveToXY too (default); sumo: SUMO moves them; "
+                         "moved_ssm: moved, and SUMO's SSM device on the egos as in the plug-in's run")
     ap.add_argument("--profile", action="store_true")
     a = ap.parse_args(argv)
+    plain_side = {"moved": "plain", "sumo": "plain_sumo", "moved_ssm": "plain_ssm"}[a.plain]
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ[var] = "1"
     with tempfile.TemporaryDirectory() as tmp:
@@ -342,22 +377,22 @@ def main(argv=None) -> None:
         if a.sequential:
             plain_s = plugin_s = float("inf")
             for _ in range(max(a.repeat, 1)):
-                pl = side("plain", str(tmp / "bench.toml"), None)
+                pl = side(plain_side, str(tmp / "bench.toml"), None)
                 pg = side("plugin", str(tmp / "bench.toml"), None, a.profile)
                 plain_s, plugin_s = min(plain_s, pl["busy_s"]), min(plugin_s, pg["busy_s"])
                 print(_line(pl, pg), flush=True)
             how = f"sequential, best of {max(a.repeat, 1)}"
         else:
             cpu = a.cpu if a.cpu is not None else max(os.sched_getaffinity(0))
-            r = interleaved(tmp / "bench.toml", cpu, a.chunk, n_steps, a.profile)
-            pl, pg = r["plain"], r["plugin"]
+            r = interleaved(tmp / "bench.toml", cpu, a.chunk, n_steps, a.profile, sides=(plain_side, "plugin"))
+            pl, pg = r[plain_side], r["plugin"]
             plain_s, plugin_s = pl["busy_s"], pg["busy_s"]
             print(_line(pl, pg), flush=True)
             print(paired_turns(pl["turns_s"], pg["turns_s"]), flush=True)
             how = f"taking turns every {a.chunk} steps on cpu {cpu}"
         print(f"vehicles {a.vehicles}  egos {len(egos)}  steps {pg['steps']}  controller {a.controller}  "
               f"collisions {pg['collisions']}  radar_brakes {pg['radar_brakes']}  radar_warnings {pg['radar_warnings']}"
-              f"  net {a.net}  ({how})")
+              f"  net {a.net}  plain side: {a.plain}  ({how})")
         if "profile" in pg:
             print(pg["profile"])
     print(f"plugin_s={plugin_s:.2f} plain_s={plain_s:.2f} ratio={plugin_s / plain_s:.2f}")

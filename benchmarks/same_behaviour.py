@@ -4,6 +4,7 @@ Usage::
 
     # record the outputs of the code in DIR (default: the checkout this script lives in)
     python benchmarks/same_behaviour.py record OUT_DIR [--code DIR] [--seeds 1-3] [--workers 2] [--only NAME ...]
+                                             [--suite FILE ...] [--no-singles]
 
     # compare two records; exit 0 = same behaviour, 1 = not
     python benchmarks/same_behaviour.py compare BASE_DIR NEW_DIR [--only NAME ...] [--tolerance REL]
@@ -21,7 +22,12 @@ each as a subprocess with ``cwd=DIR`` and ``PYTHONPATH=DIR`` (so DIR's ``sumo_av
 not the editable install; the record checks this and writes the imported path to its manifest),
 ``OMP/OPENBLAS/MKL_NUM_THREADS=1`` (as the project's batch workers) and ``PYTHONHASHSEED=0``.
 Table 4 runs with its defaults (N = 100, 600 s) over 3 seeds; ``--jobs 1`` only keeps it to one of
-the ``--workers`` slots (its outputs do not depend on it). ``--only NAME`` (repeatable) restricts the
+the ``--workers`` slots (its outputs do not depend on it). ``--suite FILE`` (repeatable, relative to DIR,
+e.g. ``scenarios/streets.toml``) adds every entry of a scenario suite, at each seed, run as the suite
+runs it: its scenario (relative to the suite file), ``--controller`` and every ``--set`` of the suite's
+``[defaults]`` and the entry, under the job name ``SUITE.ENTRY-sN`` (``SUITE`` the file's stem, ``ENTRY``
+the entry's name with ``/`` and spaces as ``_``); ``--no-singles`` leaves out the single-run
+scenarios and table4. ``--only NAME`` (repeatable) restricts the
 record to scenario NAME (file stem) and/or ``table4``. Jobs run ``--workers`` at a time. Every job's
 stdout/stderr goes to ``OUT_DIR/logs/JOB.log``; ``OUT_DIR/record.json`` holds the code checkout (its
 git commit and whether its tracked files were modified), the imported ``sumo_avoid`` path, the
@@ -121,6 +127,23 @@ def single_run_scenarios(code: pathlib.Path) -> tuple[list[pathlib.Path], list[t
     return keep, skipped
 
 
+def suite_entries(code: pathlib.Path, suite: str) -> list[tuple[str, list[str]]]:
+    """(job base name, ``run`` arguments without --seed / --out) of every entry of a suite file."""
+    path = code / suite
+    doc = tomllib.loads(path.read_text())
+    defaults = doc.get("defaults", {})
+    out = []
+    for e in doc.get("entry", []):
+        name = f"{path.stem}.{re.sub(r'[/ ()]+', '_', e['name']).strip('_')}"
+        args = [str((path.parent / e["scenario"]).relative_to(code))]
+        if e.get("controller"):
+            args += ["--controller", e["controller"]]
+        for kv in [*defaults.get("set", []), *e.get("set", [])]:
+            args += ["--set", kv]
+        out.append((name, args))
+    return out
+
+
 def child_env(code: pathlib.Path) -> dict:
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     env.update(CHILD_ENV, PYTHONPATH=str(code))
@@ -170,14 +193,17 @@ def cmd_record(args) -> int:
         return 2
 
     scenarios, skipped = single_run_scenarios(code)
-    names = {p.stem for p in scenarios} | {TABLE4}
+    if args.no_singles:
+        scenarios = []
+    entries = [x for suite in args.suite or [] for x in suite_entries(code, suite)]
+    names = {p.stem for p in scenarios} | ({TABLE4} if not args.no_singles else set()) | {n for n, _ in entries}
     only = set(args.only or [])
     unknown = only - names
     if unknown:
         print(f"record: --only {sorted(unknown)}: not among {sorted(names)}", file=sys.stderr)
         return 2
     jobs = []
-    if not only or TABLE4 in only:  # the longest job first, so it overlaps the scenario runs
+    if not args.no_singles and (not only or TABLE4 in only):  # the longest job first, so it overlaps the scenario runs
         jobs.append({"name": TABLE4, "scenario": None, "seed": None, "out": TABLE4,
                      "cmd": [sys.executable, "-m", "sumo_avoid.cli", "reproduce", "table4", "--seeds", "3",
                              "--out", str(out / TABLE4), "--jobs", "1"]})
@@ -188,6 +214,14 @@ def cmd_record(args) -> int:
             rel = f"runs/{p.stem}-s{s}"
             jobs.append({"name": f"{p.stem}-s{s}", "scenario": p.stem, "seed": s, "out": rel,
                          "cmd": [sys.executable, "-m", "sumo_avoid.cli", "run", str(p.relative_to(code)),
+                                 "--seed", str(s), "--out", str(out / rel), "--no-plots", "--quiet"]})
+    for name, run_args in entries:
+        if only and name not in only:
+            continue
+        for s in args.seeds:
+            rel = f"runs/{name}-s{s}"
+            jobs.append({"name": f"{name}-s{s}", "scenario": name, "seed": s, "out": rel,
+                         "cmd": [sys.executable, "-m", "sumo_avoid.cli", "run", *run_args,
                                  "--seed", str(s), "--out", str(out / rel), "--no-plots", "--quiet"]})
     (out / "logs").mkdir(parents=True, exist_ok=True)
     manifest = {
@@ -203,6 +237,7 @@ def cmd_record(args) -> int:
         "seeds": args.seeds,
         "only": sorted(only),
         "scenarios": [p.name for p in scenarios],
+        "suites": list(args.suite or []),
         "skipped": [{"file": f, "why": why} for f, why in skipped],
         "workers": args.workers,
         "started": time.strftime("%Y-%m-%d %H:%M:%S"),
@@ -453,6 +488,9 @@ def main(argv=None) -> int:
     r.add_argument("--code", type=pathlib.Path, default=ROOT, help="code checkout to run (default: this one)")
     r.add_argument("--seeds", type=parse_seeds, default=parse_seeds("1-3"), help="e.g. 1-3 or 1,2,5 (default 1-3)")
     r.add_argument("--workers", type=int, default=2, help="jobs at a time (default 2)")
+    r.add_argument("--suite", action="append", metavar="FILE",
+                   help="also every entry of this scenario suite (repeatable), e.g. scenarios/streets.toml")
+    r.add_argument("--no-singles", action="store_true", help="leave out the single-run scenarios and table4")
     r.add_argument("--only", action="append", metavar="NAME",
                    help="only this scenario (file stem) or 'table4'; repeatable")
     c = sub.add_parser("compare", help="compare two records; exit 0 when the behaviour is the same")

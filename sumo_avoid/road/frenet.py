@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sumo_avoid.core.geometry import point_segment_distance
+from sumo_avoid.road.frenet_compiled import project_window
 from sumo_avoid.road.polyline import arc_lengths
 
 #: Consecutive vertices closer than this are merged (near-duplicate points where lanes join), m.
@@ -268,6 +269,21 @@ class RouteFrame:
         if len(miss):
             s[miss], d[miss] = self._project_all(x[miss])
         return s, d
+
+    def point_to_frenet(self, x: float, y: float, s_hint: float | None, window_m: float = 30.0) -> tuple[float, float]:
+        """(s, d) of one point: :meth:`to_frenet` of ``[[x, y]]`` with ``[s_hint]`` (None: the whole path),
+        the windowed search compiled (:func:`sumo_avoid.road.frenet_compiled.project_window`, the same result)
+        where the window lies within the path (else, rarely, :meth:`to_frenet` itself)."""
+        if s_hint is not None and (s_hint - window_m < 0.0 or s_hint + window_m > self.s_vertex[-1]):
+            s, d = self.to_frenet(np.array([[x, y]], float), [s_hint], window_m)
+            return float(s[0]), float(d[0])
+        if s_hint is not None:
+            s, d = project_window(self.vertices, self.normals, self.seg_vec, self.seg_len, self.s_vertex,
+                                  float(x), float(y), float(s_hint), float(window_m))
+            if not np.isnan(s):
+                return s, d
+        s, d = self._project_all(np.array([[x, y]], float))
+        return float(s[0]), float(d[0])
 
     # ----------------------------------------------------------------------------- velocities
     def _frame_scale(self, s, d):

@@ -65,9 +65,9 @@ class RoutePlacement:
         t = self._tracks.get(vid)
         if t is None:
             return "", -1, OFF_ROUTE, ()
-        s, d = t.frame.to_frenet(np.asarray(centre, float)[None], None if t.s_m is None else [t.s_m])
-        t.s_m = float(s[0])
-        hit = t.lanes.lane_at(t.s_m, float(d[0]))
+        s, d = t.frame.point_to_frenet(float(centre[0]), float(centre[1]), t.s_m)
+        t.s_m = float(s)
+        hit = t.lanes.lane_at(t.s_m, float(d))
         if hit is None:
             t.off = True
             return "", -1, OFF_ROUTE, ()

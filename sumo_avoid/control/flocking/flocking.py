@@ -40,10 +40,9 @@ from sumo_avoid.control.flocking.road_flock import RoadFlock
 from sumo_avoid.control.flocking.terms import (
     FlockingParams,
     combine,
-    friction,
+    pair_terms,
     neighbour_pairs,
     polygon_shills,
-    repulsion,
     segment_shills,
     shill,
 )
@@ -146,7 +145,8 @@ class FlockingController(BaseController):
         hd = np.column_stack([np.cos(heading), np.sin(heading)])
         u = np.where((spd > 1e-6)[:, None], u, hd)
         v = p.v_flock_mps * u
-        v = v + repulsion(own_pos, nb_pos, i, j, r, p, e) + friction(own_vel, nb_vel, i, j, r, p, e)
+        rep, fric = pair_terms(own_pos, nb_pos, own_vel, nb_vel, i, j, r, p, e)
+        v = v + rep + fric
         a, b, inward = self._walls
         if len(a):
             dist, nrm = segment_shills(own_pos, a, b, inward, self.outside(own_pos))

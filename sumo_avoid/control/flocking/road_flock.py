@@ -29,9 +29,8 @@ import numpy as np
 from sumo_avoid.control.flocking.terms import (
     FlockingParams,
     combine,
-    friction,
+    pair_terms,
     neighbour_pairs,
-    repulsion,
     shill,
 )
 from sumo_avoid.control.road_view import (
@@ -189,7 +188,8 @@ class RoadFlock:
         i, j, r = neighbour_pairs(q, nq, p.r_c_m, same=False)
         keep = j != idx[i]
         i, j, r = i[keep], j[keep], r[keep]
-        v = v + repulsion(q, nq, i, j, r, p, m) + friction(vq, nv, i, j, r, p, m)
+        rep, fric = pair_terms(q, nq, vq, nv, i, j, r, p, m)
+        v = v + rep + fric
         # walls: the carriageway's bounds and the route's end
         own = footprint_corners(q, psi, L, W)  # (M,4,2)
         lo, hi = self.corridor(key, own[..., 0])

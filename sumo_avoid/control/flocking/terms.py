@@ -10,6 +10,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 from scipy.spatial import cKDTree
 
+from sumo_avoid.control.flocking.pair_terms import pair_sums
 from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.curves import braking_curve_D as D
 from sumo_avoid.core.geometry import unit_norm
@@ -108,7 +109,9 @@ def _sum_by(idx, vecs, n):
 def neighbour_pairs(pos_i, pos_j, r_c, same=True, use_tree=False):
     """Ordered pairs (i, j, r_ij) with r_ij = |pos_i[i] - pos_j[j]| <= r_c (and i != j if ``same``)."""
     if use_tree:
-        m = cKDTree(pos_i).sparse_distance_matrix(cKDTree(pos_j), r_c, output_type="ndarray")
+        tree = cKDTree(pos_i)  # one tree when both sets are the same points (the same tree as two identical ones)
+        other = tree if pos_j is pos_i or np.array_equal(pos_i, pos_j) else cKDTree(pos_j)
+        m = tree.sparse_distance_matrix(other, r_c, output_type="ndarray")
         i, j, r = m["i"].astype(np.int64), m["j"].astype(np.int64), m["v"]
         if same:  # (sparse_distance_matrix leaves out exactly coincident pairs, r = 0: no direction anyway)
             keep = i != j
@@ -123,6 +126,15 @@ def neighbour_pairs(pos_i, pos_j, r_c, same=True, use_tree=False):
 
 
 # ------------------------------------------------------------------------------ the terms
+def pair_terms(pos_i, pos_j, vel_i, vel_j, i, j, r, p: FlockingParams, n):
+    """(repulsion (n,2), friction (n,2)): :func:`repulsion` and :func:`friction` in one compiled loop
+    (:func:`sumo_avoid.control.flocking.pair_terms.pair_sums`, the same values)."""
+    return pair_sums(np.ascontiguousarray(pos_i, float), np.ascontiguousarray(pos_j, float),
+                     np.ascontiguousarray(vel_i, float), np.ascontiguousarray(vel_j, float),
+                     np.asarray(i, np.int64), np.asarray(j, np.int64), np.asarray(r, float), n,
+                     p.r0_rep_m, p.p_rep_ps, p.r0_frict_m, p.c_frict, p.v_frict_mps, p.a_frict_mps2, p.p_frict_ps)
+
+
 def repulsion(pos_i, pos_j, i, j, r, p: FlockingParams, n):
     """Σ_j v_ij_rep (eq. 1-2): p_rep (r0_rep - r_ij) (r_i - r_j)/r_ij for r_ij < r0_rep. (n,2) m/s."""
     k = r < p.r0_rep_m
