@@ -93,9 +93,10 @@ def test_an_escape_starts_only_with_room_for_the_move_across():
     ctl = ApfSaController(ApfSaParams(), Context(seed=1, step_s=0.1, turn_radius_m=4.25))
     moving, standing = _scene_ahead(6.5, 5.0), _scene_ahead(6.5, 0.0)
     assert ctl._room_to_escape(moving, 1.0, sees_behind=False)
-    assert not ctl._room_to_escape(moving, 3.2, sees_behind=True)  # braking for it: no swerve it cannot finish
-    assert ctl._room_to_escape(standing, 3.2, sees_behind=True)  # standing, it backs up for the room first
-    assert not ctl._room_to_escape(standing, -3.2, sees_behind=False)  # a front radar alone: it waits aligned
+    assert not ctl._room_to_escape(moving, 3.2, sees_behind=False)  # a front radar alone: no swerve it cannot finish
+    assert not ctl._room_to_escape(standing, -3.2, sees_behind=False)  # ... it waits aligned
+    assert ctl._room_to_escape(moving, 3.2, sees_behind=True)  # seeing behind (nothing there), it can back up for room
+    assert ctl._room_to_escape(standing, 3.2, sees_behind=True)
     assert ctl._room_to_escape(_scene_ahead(8.7, 5.0), 3.2, sees_behind=False)
 
 

@@ -225,14 +225,13 @@ class ApfSaController(BaseController):
     def _room_to_escape(self, sc: FrenetScene, offset: float, sees_behind: bool) -> bool:
         """May an escape towards ``offset`` (d) start? Where the room ahead in the ego's lane holds
         the move across (:func:`~sumo_avoid.road.gaps.lane_change_length_m` at the car's turning
-        radius, plus ``gov_standstill_m``), or, standing, where it can back up for that room (it sees
-        behind and nothing is there). A car that swerves towards a free lane while it brakes for a
-        queue it cannot clear stops across two lanes, and with a front radar alone it cannot back out
-        of it (Bologna: 22 s standing askew, passing cars clipping its rear)."""
+        radius, plus ``gov_standstill_m``), or where it can back up for that room if it stops short (it
+        sees behind and nothing is there: the three-point manoeuvre of ``_make_room``). A car that
+        swerves towards a free lane while it brakes for a queue it cannot clear stops across two
+        lanes, and with a front radar alone it cannot back out of it (Bologna: 22 s standing askew,
+        passing cars clipping its rear)."""
         need = lane_change_length_m(offset - sc.d, self.driver.steering[0]) + self.p.apf.gov_standstill_m
-        if self._room_ahead(sc, heading=0.0) >= need:
-            return True
-        return float(np.hypot(*sc.vel)) < 0.3 and sees_behind and self._clear_behind(sc)
+        return self._room_ahead(sc, heading=0.0) >= need or (sees_behind and self._clear_behind(sc))
 
     def _pass_reach(self, view: RoadView, sc: FrenetScene, st: _EgoState) -> float:
         """How far ahead the carrot may lie: while a pass moves the ego out behind the blocker, half the
