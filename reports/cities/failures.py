@@ -100,7 +100,8 @@ def main(argv: list[str]) -> int:
         lines = contact_lines(m, traj)
         if r["goal_reached"] != 1:
             lines += stand_lines(traj)
-        print("\n".join(lines))
+        if lines:
+            print("\n".join(lines))
     return 0
 
 
