@@ -87,14 +87,15 @@ def main(argv: list[str]) -> int:
     ctrl = argv[1] if len(argv) == 2 else "apf_sa"
     df = df[df["controller"] == ctrl].sort_values(["scenario", "sensor", "seed"])
     for _, r in df.iterrows():
+        sensor = "-" if r["controller"] == "sumo" else r["sensor"]  # SUMO's driver senses as SUMO does
         if r["status"] != "done":
-            print(f"{r['scenario']} {r['sensor']} seed {r['seed']}: run {r['status']}: {r['error']}")
+            print(f"{r['scenario']} {sensor} seed {r['seed']}: run {r['status']}: {r['error']}")
             continue
         fails = _fails(r)
         if not fails:
             continue
         run = base / r["artifacts"]
-        print(f"{r['scenario']} {r['sensor']} seed {r['seed']} ({r['artifacts']}): {', '.join(fails)}")
+        print(f"{r['scenario']} {sensor} seed {r['seed']} ({r['artifacts']}): {', '.join(fails)}")
         traj = pd.read_csv(run / "trajectories.csv")
         m = json.loads((run / "metrics.json").read_text())
         lines = contact_lines(m, traj)
