@@ -42,6 +42,18 @@ def _lane_heading(traj: pd.DataFrame, lane: str, t: float) -> float:
     return float(on.iloc[(on["time_s"] - t).abs().argsort()[:1]]["heading"].iloc[0])
 
 
+def _where(traj: pd.DataFrame, other: str, t: float, e) -> str:
+    """Where ``other`` was from the ego's centre at ``t`` (along / across its heading) and its speed."""
+    o = traj[(traj["id"] == other) & ((traj["time_s"] - t).abs() < 0.051)]
+    if o.empty:
+        return ""
+    o = o.iloc[0]
+    h = np.array([math.cos(e["heading"]), math.sin(e["heading"])])
+    rel = np.array([o["x"] - e["x"], o["y"] - e["y"]])
+    return (f"; {other} {rel @ h:+.1f} m along, {rel @ np.array([-h[1], h[0]]):+.1f} m across at "
+            f"{o['speed']:.1f} m/s on {o['lane']}")
+
+
 def contact_lines(m: dict, traj: pd.DataFrame) -> list[str]:
     out = []
     ego = traj[traj["id"] == "ego"].set_index("time_s")
@@ -52,7 +64,7 @@ def contact_lines(m: dict, traj: pd.DataFrame) -> list[str]:
         lane_h = _lane_heading(traj, e["lane"], t)
         skew = f"{math.degrees(_angle(e['heading'], lane_h)):.0f} deg to its lane" if lane_h == lane_h else "lane direction n/a"
         out.append(f"  ours  t={t:.1f} {other} ({ev.get('other_class', '?')}) ego on {e['lane']} at "
-                   f"{e['speed']:.1f} m/s, {skew}")
+                   f"{e['speed']:.1f} m/s, {skew}{_where(traj, other, t, e)}")
     for ev in m.get("sumo_collision_events", []):
         if "ego" in (ev["a"], ev["b"]):
             out.append(f"  SUMO  t={ev['time_s']:.1f} {ev['a']}/{ev['b']} {ev['type']} on {ev['lane']} "
@@ -74,6 +86,8 @@ def stand_lines(traj: pd.DataFrame) -> list[str]:
     near = near.sort_values("ahead").head(3)
     who = ", ".join(f"{r['id']} {r['ahead']:.0f} m ahead, {r['side']:+.1f} m across, {r['speed']:.1f} m/s on {r['lane']}"
                     for _, r in near.iterrows()) or "nothing within 30 m ahead and 4 m across"
+    if last["time_s"] - since < 1.0:
+        return [f"  still moving at the end of the run (t={last['time_s']:.1f}, {last['speed']:.1f} m/s on {last['lane']})"]
     return [f"  stood still from t={since:.1f} to the end ({last['time_s'] - since:.0f} s) on {last['lane']} at "
             f"({last['x']:.1f}, {last['y']:.1f}); ahead: {who}"]
 
