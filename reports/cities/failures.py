@@ -121,4 +121,8 @@ def main(argv: list[str]) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    try:
+        sys.exit(main(sys.argv[1:]))
+    except (FileNotFoundError, OSError, ValueError) as e:  # a missing or unreadable ledger or CSV: one line
+        print(f"failures.py: {e}", file=sys.stderr)
+        sys.exit(2)

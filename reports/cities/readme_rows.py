@@ -41,15 +41,21 @@ def main(argv: list[str]) -> int:
     if not argv or not all("=" in a for a in argv):
         print('usage: python reports/cities/readme_rows.py "NAME=FILE.csv[,FILE2.csv]" ...', file=sys.stderr)
         return 2
+    suites = []
+    for arg in argv:  # every file read before anything is printed
+        name, files = arg.split("=", 1)
+        suites.append((name, pd.concat([pd.read_csv(f) for f in files.split(",")], ignore_index=True)))
     print(HEAD)
     print("|" + "---|" * (HEAD.count("|") - 1))
-    for arg in argv:
-        name, files = arg.split("=", 1)
-        df = pd.concat([pd.read_csv(f) for f in files.split(",")], ignore_index=True)
+    for name, df in suites:
         for line in rows(name, df):
             print(line)
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    try:
+        sys.exit(main(sys.argv[1:]))
+    except (FileNotFoundError, OSError, ValueError) as e:  # a missing or unreadable ledger or CSV: one line
+        print(f"readme_rows.py: {e}", file=sys.stderr)
+        sys.exit(2)

@@ -73,4 +73,8 @@ def main(argv: list[str]) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    try:
+        sys.exit(main(sys.argv[1:]))
+    except (FileNotFoundError, OSError, ValueError) as e:  # a missing or unreadable ledger or CSV: one line
+        print(f"summarise.py: {e}", file=sys.stderr)
+        sys.exit(2)
