@@ -144,13 +144,13 @@ def check_inputs(net, files) -> None:
                 raise InputError(f, f"its type '{a['type']}' is not defined (no <vType> of that id)", what)
             if "route" in a and a["route"] not in routes:
                 raise InputError(f, f"its route '{a['route']}' is not defined", what)
-            for key in ("from", "to"):
-                if key in a and a[key] not in info.lanes:
+            for key in ("from", "to"):  # SUMO trims the ids ('to="E1 "': Wildau's counted flows)
+                if key in a and a[key].strip() not in info.lanes:
                     raise InputError(f, f"its {key} edge '{a[key]}' is not in the network {net}", what)
             for e in a.get("via", "").split():
                 if e not in info.lanes:
                     raise InputError(f, f"its via edge '{e}' is not in the network {net}", what)
-            edges = inner if inner is not None else routes.get(a.get("route"), ()) or ((a["from"],) if "from" in a else ())
+            edges = inner if inner is not None else routes.get(a.get("route"), ()) or ((a["from"].strip(),) if "from" in a else ())
             if inner is not None:
                 _check_path(f, info, inner, what, net)
             lane = a.get("departLane", "")

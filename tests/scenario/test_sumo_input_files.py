@@ -1,6 +1,7 @@
 """Input files SUMO loads are accepted by the scenario loader as well: additional files with the older root
 element <add> (the Bologna district's signal programs and bus stops) and gzip-compressed networks (Berlin's
-net.net.xml.gz); a root SUMO does not know is still refused, naming the file and the key."""
+net.net.xml.gz), trip and flow edge ids with spaces around them (Wildau's counted flows, which SUMO trims); a root
+SUMO does not know is still refused, naming the file and the key."""
 import gzip
 import shutil
 
@@ -54,3 +55,19 @@ def test_a_broken_gzip_network_is_refused_naming_the_key(tmp_path):
     with pytest.raises(ScenarioError) as e:
         scenario.load(_scenario(tmp_path, "net.net.xml.gz", "a.add.xml"))
     assert "key 'sim.net'" in str(e.value)
+
+
+def test_flow_edges_with_spaces_around_them_load_as_sumo_trims_them(tmp_path):
+    """Wildau's flows_SUMOV2.2.rou.xml has to="-111677669#0 " and from="880140407 ": SUMO loads them."""
+    flows = ('<routes>\n    <flow id="f" begin="0" end="10" number="2" from=" road" to="road " via=" road "/>\n'
+             '</routes>\n')
+    (tmp_path / "flows.rou.xml").write_text(flows)
+    (tmp_path / "a.add.xml").write_text(f"<additional>\n    {POLY}\n</additional>\n")
+    path = _scenario(tmp_path, str(NET), "a.add.xml")
+    path.write_text(path.read_text().replace('routes = ["overtaking.rou.xml"]',
+                                             'routes = ["overtaking.rou.xml", "flows.rou.xml"]'))
+    assert scenario.load(path).spec.sim.routes == ("overtaking.rou.xml", "flows.rou.xml")
+    (tmp_path / "flows.rou.xml").write_text(flows.replace('to="road "', 'to="nowhere "'))
+    with pytest.raises(ScenarioError) as e:
+        scenario.load(path)
+    assert "its to edge 'nowhere ' is not in the network" in str(e.value)
