@@ -73,8 +73,6 @@ def main(argv: list[str]) -> int:
 
 
 if __name__ == "__main__":
-    try:
-        sys.exit(main(sys.argv[1:]))
-    except (FileNotFoundError, OSError, ValueError) as e:  # a missing or unreadable ledger or CSV: one line
-        print(f"summarise.py: {e}", file=sys.stderr)
-        sys.exit(2)
+    from one_line import run
+
+    run(main)
