@@ -3,7 +3,10 @@
 * ``crossing_violations``: each time an ego's front bumper enters a crossing its link must give way
   at (:attr:`~sumo_avoid.road.crossings.CrossingLink.gives_way`, while the crossing is the people's:
   unsignalised or their green) with a person on it or about to step onto it
-  (:func:`~sumo_avoid.road.crossings.persons_at`, from the persons recorded at the step before), and
+  (:func:`~sumo_avoid.road.crossings.persons_at`, from the persons recorded at the step before; one
+  walking towards the ego's stretch of it only if, at its speed, it gets there before the ego's rear has
+  left the crossing, as recorded: SUMO's drivers go when the people reach the crossing after they have
+  passed, and so does the rules layer over consecutive crossings), and
   each crossing an ego came to stand on (slower than ``[layers.traffic]`` stop_speed_mps with its
   footprint's length over the crossing's span on the path) while its people may cross (unsignalised, or
   their green): the ego blocks it. Standing on it only through their red (a left turn waiting in a
@@ -41,8 +44,12 @@ def crossing_events(run: RunResult) -> list[dict]:
                 who = []
                 if len(rows):
                     p = persons.iloc[rows]
+                    # a person walking towards the ego's stretch counts if it gets there before the ego
+                    # (its rear) has left the crossing, as the recording shows the ego leave
+                    gone = np.flatnonzero(s[k + 1:] - length >= c.s_exit_m)
+                    horizon = float(t[k + 1 + gone[0]] - t[k]) if len(gone) else np.inf
                     on = persons_at(c, p["lane"].fillna("").to_numpy(), p[["x", "y"]].to_numpy(float),
-                                    p[["vx", "vy"]].to_numpy(float), half, rules.crossing_gap_m)
+                                    p[["vx", "vy"]].to_numpy(float), half, rules.crossing_gap_m, horizon)
                     who = sorted(p["id"].astype(str).to_numpy()[on].tolist())
                 out.append({"ego": vid, "crossing": c.crossing, "time_s": float(t[k + 1]), "persons": who,
                             "kind": "entered", "violation": bool(who)})

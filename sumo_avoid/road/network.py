@@ -31,6 +31,7 @@ from sumo_avoid.road.route_plan import RoutePlan, RoutePlanner, kerb_room
 
 
 WALKWAY_TOL_M = 0.3  # a point this close to a sidewalk or walking area is on it (Road.on_walkway), m
+KERB_CAP_M = 1.0  # people waiting at a crossing stand up to this far beyond its end (Road.at_kerb), m
 
 
 def _offset_left(shape: np.ndarray, dist: float) -> np.ndarray:
@@ -184,22 +185,53 @@ class Road:
         lane only people walk on, off the carriageway), or within :data:`WALKWAY_TOL_M` of one (a radar
         return lies on a person's near side; SUMO stands the people waiting for a crossing on its end,
         where a rounded corner leaves a few centimetres outside the walking area)."""
+        return self._inside("walkway", self._walkway_polygons, points)
+
+    def at_kerb(self, points) -> np.ndarray:
+        """(M,2) points -> (M,) bool: :meth:`on_walkway`, or where SUMO stands the people waiting at a
+        crossing's end: across the crossing's whole width, up to :data:`KERB_CAP_M` beyond its end (its
+        striping model spreads them over the crossing's width, which can reach past the walking area
+        onto the lane beside it -- Bologna's corner 1c: 1 m). A radar return there is a person at the
+        kerb, not on the carriageway (the crossing rule, not the margin, decides when it may step on)."""
+        return self._inside("kerb", lambda: self._walkway_polygons() + self._crossing_ends(), points)
+
+    def _walkway_polygons(self) -> list:
+        polys = []
+        for lane_id in self.elements.walkways:
+            ln = self.elements.lanes[lane_id]
+            shape = np.asarray(ln.shape, float)[:, :2]
+            if ln.function == "walkingarea" and len(shape) >= 3:
+                polys.append(Polygon(shape).buffer(0))
+            elif len(shape) >= 2:
+                polys.append(LineString(shape).buffer(0.5 * ln.width_m, cap_style="flat"))
+        return polys
+
+    def _crossing_ends(self) -> list:
+        """A rectangle at each end of each crossing: its width across, from its end to KERB_CAP_M beyond."""
+        out = []
+        for c in self.elements.crossings.values():
+            shape = np.asarray(c.shape, float)[:, :2]
+            if len(shape) < 2:
+                continue
+            for end, prev in ((shape[-1], shape[-2]), (shape[0], shape[1])):
+                axis = end - prev
+                n = float(np.hypot(*axis))
+                if n < 1e-9:
+                    continue
+                axis /= n
+                out.append(LineString([end, end + KERB_CAP_M * axis]).buffer(0.5 * c.width_m, cap_style="flat"))
+        return out
+
+    def _inside(self, key: str, polygons, points) -> np.ndarray:
         pts = np.asarray(points, dtype=float).reshape(-1, 2)
-        if "walkway" not in self._areas:
-            polys = []
-            for lane_id in self.elements.walkways:
-                ln = self.elements.lanes[lane_id]
-                shape = np.asarray(ln.shape, float)[:, :2]
-                if ln.function == "walkingarea" and len(shape) >= 3:
-                    polys.append(Polygon(shape).buffer(0))
-                elif len(shape) >= 2:
-                    polys.append(LineString(shape).buffer(0.5 * ln.width_m, cap_style="flat"))
+        if key not in self._areas:
+            polys = polygons()
             area = shapely.union_all(polys).buffer(WALKWAY_TOL_M) if polys else Polygon()
             shapely.prepare(area)
-            self._areas["walkway"] = area
+            self._areas[key] = area
         if len(pts) == 0:
             return np.zeros(0, bool)
-        return np.asarray(shapely.contains_xy(self._areas["walkway"], pts[:, 0], pts[:, 1]), bool)
+        return np.asarray(shapely.contains_xy(self._areas[key], pts[:, 0], pts[:, 1]), bool)
 
     def segments_near(self, point, radius_m: float, *, with_kind: bool = False):
         """Boundary segments and solid lines within ``radius_m`` of ``point``.

@@ -9,7 +9,8 @@ Each is built as ``cls(params, ctx, *, needs_scans, v2v)`` (:class:`sumo_avoid.c
   all mounts), and the
   traffic's direction at each ego (its route path's nearest segment), along which returns are
   taken to move (:mod:`.perception`); a return labelled a person or cyclist is placed on the map
-  (``Detections.walkway``: on a sidewalk or walking area), as an ADAS fuses its radar with its map.
+  (``Detections.walkway``: on a sidewalk or walking area, or where people wait at a crossing's end:
+  ``Road.at_kerb``), as an ADAS fuses its radar with its map.
 
 Both hand flock members' V2V messages on (:mod:`.v2v`) when the controller needs them.
 """
@@ -97,5 +98,5 @@ class RadarSensor(_Base):
         along = route_directions(None, snap.pos[rows], snap.heading[rows], self._segs)
         seen = self.front.objects(scans, along)  # one fused memory over the mounts; a tuple, like scans
         if self.road is not None and any(d.vru is not None for d in seen):  # labelled returns placed on the map
-            seen = tuple(d if d.vru is None else replace(d, walkway=self.road.on_walkway(d.points())) for d in seen)
+            seen = tuple(d if d.vru is None else replace(d, walkway=self.road.at_kerb(d.points())) for d in seen)
         return Observation(snap, ids, rows, ego_speed, self.obstacles, scans, seen, along, self.v2v)

@@ -121,3 +121,48 @@ def test_what_is_nearest_to_the_rear_half_does_not_steer_the_ego(beside_m, o_spe
         assert near[1] == free[1]
     else:
         assert near[1] > free[1] + 1.0
+
+
+def _kerb_scene(heading_rad, person_vd=0.0):
+    """Bologna corner 1c (bologna_signals, truth, seed 1, 404.6 s, as recorded): the ego (4.8 x 1.8 m,
+    standing) at d -0.109, turned ``heading_rad`` from the road, two people (0.215 x 0.478 m, facing across
+    the road) waiting at the crossing's end 0.4 and 1.1 m ahead of its front, 0.45 m beside its right side
+    (d -1.745, -1.739), its lanes -1.6 .. 1.619."""
+    from sumo_avoid.control.road_view import FrenetScene
+
+    o_pos = np.array([[523.8582, -1.7451], [523.2189, -1.7391]])
+    return FrenetScene(520.2706, -0.1091, heading_rad, np.zeros(2), 4.8, 1.8, o_pos, np.array([1.564, 1.5644]),
+                       np.full(2, 0.215), np.full(2, 0.478), np.array([[0.0, person_vd]] * 2),
+                       lambda s: (np.full(len(s), -1.6), np.full(len(s), 1.6193)))
+
+
+def _kerb_driver(turn_radius_m=4.25):
+    from sumo_avoid.control.apf.apf import ApfDriver, ApfParams
+    from sumo_avoid.core.interfaces import Context
+
+    return ApfDriver(ApfParams(), Context(seed=1, step_s=0.1, turn_radius_m=turn_radius_m))
+
+
+def test_people_waiting_beside_the_strip_that_the_heading_points_at_are_passed_at_a_crawl():
+    from sumo_avoid.core.geometry import footprint_corners
+
+    ctl, target = _kerb_driver(), np.array([540.0, 0.0])
+    # aligned with the road the people are beside its strip (0.5 m from its side, more than the 0.4 m margin)
+    assert ctl.field(_kerb_scene(0.0), np.array([[520.2706, -0.1091]]), target).v_safe > 10.0
+    # turned 0.08 rad towards them (its footprint's side then 0.44 m from them), the governor's straight strip
+    # along the heading catches them (it stood there 35 s, on the crossing); the car turns back within
+    # R (1 - cos h) = 4.25 (1 - cos 0.08) = 0.014 m sideways, 0.43 m stay: it passes at squeeze speed,
+    # reached from the gap along its heading
+    sc = _kerb_scene(-0.0799)
+    hd = np.array([np.cos(-0.0799), np.sin(-0.0799)])
+    corners = footprint_corners(sc.o_pos, sc.o_heading, sc.o_length, sc.o_width)
+    gap = float(((corners - sc.q) @ hd).min() - 0.5 * sc.length)
+    assert 0.4 < gap < 0.45
+    v = ctl.field(sc, sc.q[None], target).v_safe
+    assert v == pytest.approx(np.sqrt(ctl.p.squeeze_speed_mps**2 + 2.0 * ctl.p.gov_decel_mps2 * gap), rel=1e-9)
+
+
+def test_a_person_stepping_towards_the_strip_still_stops_the_turned_ego():
+    ctl, target = _kerb_driver(), np.array([540.0, 0.0])
+    sc = _kerb_scene(-0.0799, person_vd=0.5)  # walking towards the ego's path at 0.5 m/s
+    assert ctl.field(sc, sc.q[None], target).v_safe == 0.0

@@ -90,3 +90,17 @@ def test_the_ego_stops_before_the_zebra_while_a_person_crosses_and_goes_when_it_
     assert front_x.iloc[-1] > 150.0  # ... and drove on once the person had left it
     assert m["min_gap_vru_m"] > 1.0  # the rule's crossing_margin_m beyond the footprint's side
     assert m["crossing_violations"] == 0 and [e["persons"] for e in m["crossing_events"]] == [[]]
+
+
+@pytest.mark.parametrize("walk_s, counted", [(17.0, True), (19.0, False)])
+def test_a_person_walking_up_counts_only_if_it_gets_there_before_the_ego_has_left(street, walk_s, counted):
+    # the walker comes from the far (north) side and walks over the westbound lane towards the ego's; a blind ego
+    # at 10 m/s enters at 24.5 s and is over the 4 m crossing within a second. Departing at 17 s the walker
+    # reaches the ego's stretch (its side + 1 m margin) before the ego has left it: a violation; at 19 s it is
+    # still 2 s away then (both were held by the old count, which ignored when the ego left)
+    _, m = _run(street, f"walks_up_{int(walk_s)}", 10.0, walk_s,
+                'controller = "scripted"\nlayers = []\n[controllers.scripted]\nspeed_mps = 10.0\n', far_side=True)
+    (ev,) = m["crossing_events"]
+    assert m["collisions"] == 0 and ev["kind"] == "entered" and ev["time_s"] == 24.5
+    assert (ev["persons"] == ["walker"]) == counted and m["crossing_violations"] == int(counted)
+    assert (m["min_gap_vru_m"] < 1.0) == counted  # ... and it did come within the margin, or not
