@@ -43,6 +43,8 @@ DROP_BACK_MPS = 2.0
 #: from its lane's centre towards the next, m.
 LANE_FREE_S = 1.0
 COMMIT_M = 0.5
+#: ... past a car behind in the target lane slower than this (it waits for the ego), m/s
+YIELDING_MPS = 0.5
 #: Changes are held only where the lane the ego needs runs straighter than this radius where the
 #: lane it is in tapers off, m. On a roundabout's ring holding the inner lane while braking for ring
 #: cars swings the car over the kerb; there the path blends across and the field keeps it off the
@@ -189,9 +191,14 @@ class RoadView:
                               move_m=move)
         ds = sc.o_pos[:, 0] - sc.s
         alongside = block & (np.abs(ds) < 0.5 * (sc.length + sc.o_length) + GAP_MIN_M)
+        # a car standing wholly behind the ego in that lane waits for it (it stopped for the ego's corner
+        # in its lane): it does not hold a change under way, even one held before (berlin_bike_tram: the
+        # ego half across, the car behind stopped 2.5 m back, each waited for the other to the end)
+        waits = block & (o_vs < YIELDING_MPS) & (ds + 0.5 * (sc.length + sc.o_length) < 0.0)
         held = self._held_free_s is not None
         if block.any():
-            if not held and step * (sc.d - centres[own]) > COMMIT_M and not alongside.any():
+            if (step * (sc.d - centres[own]) > COMMIT_M and not (alongside & ~waits).any()
+                    and (not held or waits[block].all())):
                 return 0.0, np.inf  # under way: carry it through
             self._held_free_s = 0.0
         elif not held:
