@@ -166,3 +166,24 @@ def test_a_person_stepping_towards_the_strip_still_stops_the_turned_ego():
     ctl, target = _kerb_driver(), np.array([540.0, 0.0])
     sc = _kerb_scene(-0.0799, person_vd=0.5)  # walking towards the ego's path at 0.5 m/s
     assert ctl.field(sc, sc.q[None], target).v_safe == 0.0
+
+
+def test_a_car_squeezed_past_pushes_the_ego_across_from_as_far_as_it_needs_to_move_over():
+    # wildau_turns, truth, seed 1 (as recorded at 54423.6 s): a left-turner (5 x 1.8 m) waits inside the junction
+    # at d 2.45, turned 161.6 degrees to the ego's road, its corner 0.24 m into the ego's strip and 2 m ahead of the
+    # ego's front. Moving over by that + 0.1 m at a 4.25 m turning radius takes 2.4 m along the road: its push
+    # (straight across, to the right) reaches that far. Before, it pushed only within 1 m, along the road, which
+    # moves no car beside it: the ego crawled up to it in its lane and stood there, the left-turner waiting for it
+    from sumo_avoid.control.road_view import FrenetScene
+    from sumo_avoid.road.gaps import lane_change_length_m
+
+    sc = FrenetScene(438.43, 0.14, 0.022, np.array([4.8, 0.0]), 4.8, 1.8, np.array([[445.45, 2.45]]),
+                     np.array([-2.82]), np.array([5.0]), np.array([1.8]), np.zeros((1, 2)),
+                     lambda s: (np.full(len(s), -1.6), np.full(len(s), 2.35)))
+    assert lane_change_length_m(0.34, 4.25) == pytest.approx(2.39, abs=0.01)
+    target = np.array([453.4, 0.14])
+    F = _kerb_driver().field(sc, sc.q[None], target).F[0]
+    assert F[1] < -5.0  # across, to the right (-7.2 against the attraction's 10 along the road)
+    free = FrenetScene(438.43, 0.14, 0.022, np.array([4.8, 0.0]), 4.8, 1.8, np.zeros((0, 2)), np.zeros(0), np.zeros(0),
+                       np.zeros(0), np.zeros((0, 2)), sc.corridor)
+    assert F[0] == pytest.approx(_kerb_driver().field(free, free.q[None], target).F[0, 0])  # and nothing along it

@@ -49,6 +49,7 @@ from sumo_avoid.core.geometry import (
     footprint_corners,
 )
 from sumo_avoid.core.types import EgoTask, Observation
+from sumo_avoid.road.gaps import lane_change_length_m
 
 
 @dataclass(frozen=True)
@@ -190,14 +191,23 @@ class ApfDriver:
             side = np.sign(np.tile(sc.o_pos[:, 1], C) - np.repeat(q_cand[:, 1], O))
             lat_closing = np.maximum(v_rel[:, 1] * side, 0.0)
             beside = (e_lo - p.gov_margin_m > o_hi) | (e_hi + p.gov_margin_m < o_lo)
-            squeeze = ~beside & self._squeeze(sc, q_cand, oc, (o_lo, o_hi), side, lat_closing)
+            passable, shift = self._squeeze(sc, q_cand, oc, (o_lo, o_hi), side, lat_closing)
+            squeeze = ~beside & passable
             slow = np.tile(np.hypot(*sc.o_vel.T), C) <= p.squeeze_speed_mps
             crawl = squeeze | (slow & self._turned_towards(h, beside, side, (e_lo, e_hi), (o_lo, o_hi), lat_closing))
             beside = beside | squeeze
+            # one squeezed past pushes straight across the road, away from it (its corner just ahead of the
+            # ego's front face is nearest along the road, and along the road it pushes no car beside it),
+            # from as far as the car needs to move over by the shift at its turning radius (wildau_turns: a
+            # left-turner waiting inside the junction 0.24 m into the ego's strip pushed only within 1 m,
+            # the ego crawled up to it without moving over and stood there for good)
+            away = np.where(squeeze[:, None], np.column_stack([np.zeros(C * O), -side]), away)
+            move = np.zeros(C * O)
+            move[squeeze] = [lane_change_length_m(x, self.steering[0]) for x in shift[squeeze]]
             # its influence distance is the clearance kept beside a car plus the lateral stopping
             # distance of its closing speed: the ego's own speed (the headway term, for following)
             # does not count, so a lane-centred car in the next lane does not push the ego at all
-            rho0 = np.where(beside, p.rho0_beside_m + lat_closing**2 / (2 * p.rho0_decel_mps2),
+            rho0 = np.where(beside, p.rho0_beside_m + move + lat_closing**2 / (2 * p.rho0_decel_mps2),
                             p.rho0_min_m + cos_phi * (closing**2 / (2 * p.rho0_decel_mps2)
                                                       + p.rho0_headway_s * np.hypot(*v_ego)))
             Ur, Fr = repulsion(rho, away, rho0, p.k_rep)
@@ -229,8 +239,8 @@ class ApfDriver:
             U, F = U + Ur, F + Fr
         return Field(U, F, float(v_safe))
 
-    def _squeeze(self, sc: FrenetScene, q_cand, oc, o_span, side, lat_closing) -> np.ndarray:
-        """(C*O,) bool: the vehicle stands (or crawls) and does not close across the road, and the
+    def _squeeze(self, sc: FrenetScene, q_cand, oc, o_span, side, lat_closing):
+        """((C*O,) bool, (C*O,) shift, m): the vehicle stands (or crawls) and does not close across the road, and the
         ego, taken as aligned with the road (like for the bounds: a heading turned away from the
         vehicle must not make its rear corner count), clears it with ``squeeze_clear_m`` by a small
         sideways shift (<= ``gov_margin_m``) that keeps it in its lanes and that it can make before
@@ -250,7 +260,7 @@ class ApfDriver:
         slow = np.tile(np.hypot(*sc.o_vel.T), C) <= p.squeeze_speed_mps
         small = shift <= p.gov_margin_m  # it reaches at most gov_margin - clear into the ego's strip: the
         # shifted ego needs no check against the others (their own pushes keep it off them)
-        return slow & small & (lat_closing <= p.squeeze_closing_mps) & room & in_time
+        return slow & small & (lat_closing <= p.squeeze_closing_mps) & room & in_time, shift
 
     def _turned_towards(self, h: float, beside, side, e_span, o_span, lat_closing) -> np.ndarray:
         """(C*O,) bool: a standing (or crawling) vehicle -- a person waiting at the kerb -- beside the
