@@ -1,12 +1,10 @@
-"""``apf_sa``: the potential field of :mod:`.apf` plus simulated-annealing escape (SPEC §2, seed
-001 §2.2, Fig. 2).
+"""``apf_sa``: the potential field of :mod:`.apf` plus simulated-annealing escape (SPEC §2, seed 001 §2.2, Fig. 2).
 
-Trap detector (documented choice): an ego is *trapped* when, over the last ``trap_window_s``, it
-advanced along its route less than ``trap_progress_frac * cruise * window`` **and** right now
-either the force has almost vanished (``|F| < trap_force_frac * F_att_max``, the field's local
-minimum) or the speed governor holds it below cruise (an obstacle it cannot pass sits in its
-corridor). Both together: a car slowed in a bend is not trapped, a car queued behind a stopped
-obstacle is.
+Trap detector (documented choice): an ego is *trapped* when, over the last ``trap_window_s``, it advanced
+along its route less than ``trap_progress_frac * cruise * window`` **and** right now either the force has
+almost vanished (``|F| < trap_force_frac * F_att_max``, the field's local minimum) or the speed governor
+holds it below cruise (an obstacle it cannot pass sits in its corridor): a car slowed in a bend is not
+trapped, one behind a stopped obstacle is -- but behind a queue at a stop line (:mod:`.queue`) it waits.
 
 Everything runs in the ego's route frame (s, d), like :mod:`.apf`. Simulated annealing (seed
 Fig. 2) on the field frozen at that instant: from x = the ego's centre (s, d),
@@ -30,6 +28,7 @@ import numpy as np
 
 from sumo_avoid.control.apf.apf import ApfDriver, ApfParams
 from sumo_avoid.control.apf.oncoming_pass import ABORT_D_M, PASS_CARROT_MIN_M, RADAR_SIGHT_M, OncomingPass, PassParams
+from sumo_avoid.control.apf.queue import STAND_MPS, waits_in_queue
 from sumo_avoid.control.base_controller import BaseController
 from sumo_avoid.control.road_view import FrenetScene, RoadView
 from sumo_avoid.core.config import FieldError, field_doc
@@ -62,6 +61,8 @@ class ApfSaParams:
                                                   "escape_progress_m closer to its offset or backing up, s")
     escape_progress_m: float = field_doc(0.5, doc="lateral progress towards the offset that restarts the timeout, m")
     escape_max_s: float = field_doc(40.0, doc="give up an escape after this long in any case, s")
+    queue_reach_m: float = field_doc(15.0, doc="a queue (control/apf/queue.py) starts this close to a stop line, m ...")
+    queue_patience_s: float = field_doc(30.0, doc="... in one the ego starts no escape before it has stood this long, s")
     escape_room_m: float = field_doc(12.0, doc="when blocked, back up until this much room (at least the "
                                                "carrot distance, lookahead_min_m) is free ahead along the route, m")
     escape_reverse_speed_mps: float = field_doc(1.5, doc="speed while backing up, m/s")
@@ -92,6 +93,7 @@ class _EgoState:
     pass_rear_s: float = math.nan  # while passing: the blocker's rear (s); the pass is called off before it
     pass_checked_s: float = -math.inf  # when the oncoming lane was last looked at for a pass
     pass_ready: bool = False  # behind a vehicle it may pass, waiting for the oncoming lane: room made, held
+    stood_since_s: float | None = None  # standing (slower than queue.STAND_MPS) since
 
 
 class ApfSaController(BaseController):
@@ -129,8 +131,7 @@ class ApfSaController(BaseController):
         out = np.zeros((len(obs.ego_ids), 2))
         f_max = a.k_att * a.d_att_m
         t = obs.snapshot.time_s
-        # backing up needs a view behind: ground truth, or a rear radar (a front radar alone does not
-        # see the cars behind)
+        # backing up needs a view behind: ground truth, or a rear radar (a front radar does not see the cars behind)
         sees_behind = obs.detections is None or any(d.mount == "rear" for d in obs.detections)
         for k, (vid, row) in enumerate(zip(obs.ego_ids, obs.ego_rows)):
             task, st, view = self.tasks[vid], self.state[vid], drv.views[vid]
@@ -141,6 +142,7 @@ class ApfSaController(BaseController):
             if st.escape_offset is not None:
                 self._update_escape(st, sc.d, t)
             st.history.append((t, sc.s))
+            st.stood_since_s = (st.stood_since_s if st.stood_since_s is not None else t) if speed < STAND_MPS else None
             while st.history and st.history[0][0] < t - p.trap_window_s - 1e-9:
                 st.history.popleft()
             offset, v_lane = view.lane_change(sc, drv.lookahead(speed), a.gov_decel_mps2, drv.step_s)  # the path's lane changes wait for a gap
@@ -164,7 +166,9 @@ class ApfSaController(BaseController):
                 st.pass_checked_s = t
                 self._try_pass(vid, view, sc, st, obs, row, task)
             if (st.escape_offset is None and window_full and slow and stuck_now and
-                    (t >= st.cooldown_until_s or (view.passing is not None and st.pass_checked_s == t))):
+                    (t >= st.cooldown_until_s or (view.passing is not None and st.pass_checked_s == t)) and
+                    not waits_in_queue(sc, task, view.length_m, 0.0 if st.stood_since_s is None else t - st.stood_since_s,
+                                       p.queue_reach_m, p.queue_patience_s)):
                 end = self._anneal(view, sc, target)
                 offset = None if end is None else self._inside_offset(view, sc, end)
                 if end is None:
@@ -223,13 +227,10 @@ class ApfSaController(BaseController):
             st.pass_ready = sees_behind and self.passer.candidate(vid, view, sc, t, task) is not None
 
     def _room_to_escape(self, sc: FrenetScene, offset: float, sees_behind: bool) -> bool:
-        """May an escape towards ``offset`` (d) start? Where the room ahead in the ego's lane holds
-        the move across (:func:`~sumo_avoid.road.gaps.lane_change_length_m` at the car's turning
-        radius, plus ``gov_standstill_m``), or where it can back up for that room if it stops short (it
-        sees behind and nothing is there: the three-point manoeuvre of ``_make_room``). A car that
-        swerves towards a free lane while it brakes for a queue it cannot clear stops across two
-        lanes, and with a front radar alone it cannot back out of it (Bologna: 22 s standing askew,
-        passing cars clipping its rear)."""
+        """May an escape towards ``offset`` (d) start? Where the room ahead holds the move across
+        (:func:`~sumo_avoid.road.gaps.lane_change_length_m` + ``gov_standstill_m``), or where it can back
+        up for it (it sees behind, nothing is there: ``_make_room``). Else it would stop across two lanes,
+        and with a front radar alone not back out (Bologna: 22 s askew, passing cars clipping its rear)."""
         need = lane_change_length_m(offset - sc.d, self.driver.steering[0]) + self.p.apf.gov_standstill_m
         return self._room_ahead(sc, heading=0.0) >= need or (sees_behind and self._clear_behind(sc))
 

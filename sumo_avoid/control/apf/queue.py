@@ -1,0 +1,51 @@
+"""Whether the vehicle standing ahead of an ego is queued (APF-SA's escapes wait for a queue, not for a
+blocked lane): pure geometry in the ego's route frame (s along its path, d across).
+
+A queue is a chain of vehicles standing in the ego's lane one behind the other -- each at most
+:data:`CHAIN_GAP_M` bumper to bumper behind the next -- whose first stands within ``reach_m`` of a
+stop line of the ego's path (a junction link's, or the path's end, where it leaves its last edge). It
+moves when its junction lets it: drivers wait in it, they do not change lanes to pass it (bologna_bus_lane,
+truth: braking behind a car waiting at the end of edge 46, the ego started an escape into the next lane,
+stood across the two and was clipped by five passing cars). A van parked there is also "queued"; the
+controller escapes past it once it has stood behind it for its patience (``queue_patience_s``).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+CHAIN_GAP_M = 8.0  # a standing vehicle at most this far (bumper to bumper) behind the next is queued behind it, m
+STAND_MPS = 0.5  # slower than this a vehicle stands, m/s
+LANE_HALF_M = 1.6  # a vehicle whose centre is this close across to the ego's is in its lane, m
+
+
+def queued_ahead(sc, stops_s, reach_m: float) -> bool:
+    """Is the nearest vehicle ahead of the ego in its lane standing at the back of a queue whose first
+    vehicle stands within ``reach_m`` of one of the stop lines ``stops_s`` (arc lengths on the path)?
+    ``sc`` a :class:`~sumo_avoid.control.road_view.FrenetScene`."""
+    if not len(sc.o_pos):
+        return False
+    front = sc.s + 0.5 * sc.length
+    s, d = sc.o_pos[:, 0], sc.o_pos[:, 1]
+    half = 0.5 * np.asarray(sc.o_length, float)
+    mine = np.flatnonzero((np.abs(d - sc.d) < LANE_HALF_M) & (s + half > front))
+    if not len(mine):
+        return False
+    mine = mine[np.argsort(s[mine])]
+    if np.hypot(*sc.o_vel[mine[0]]) >= STAND_MPS:
+        return False  # the nearest one ahead moves: not waiting in a queue
+    head = mine[0]
+    for k in mine[1:]:
+        if np.hypot(*sc.o_vel[k]) >= STAND_MPS or (s[k] - half[k]) - (s[head] + half[head]) > CHAIN_GAP_M:
+            break
+        head = k
+    head_front = s[head] + half[head]
+    stops = np.asarray(stops_s, float)
+    return bool(np.any((stops >= head_front - half[head]) & (stops - head_front <= reach_m)))
+
+
+def waits_in_queue(sc, task, path_length_m: float, stood_s: float, reach_m: float, patience_s: float) -> bool:
+    """An APF-SA ego trapped behind a queue (:func:`queued_ahead`; the stop lines of ``task.links`` and
+    its path's end at ``path_length_m``) waits in it until it has stood ``patience_s`` (``stood_s`` so far)."""
+    if stood_s >= patience_s:
+        return False
+    return queued_ahead(sc, [lk.s_stop_m for lk in task.links] + [path_length_m], reach_m)
