@@ -25,7 +25,7 @@ from sumo_avoid.core.geometry import wrap_angle
 from sumo_avoid.road.route_lanes import RouteLanes
 from sumo_avoid.road.polyline import arc_lengths
 from sumo_avoid.core.types import EgoTask, Observation
-from sumo_avoid.sensing.perception import obstacle_vehicles
+from sumo_avoid.sensing.perception import obstacle_vehicles, towards_path
 
 #: Vehicles farther than this across the path are not part of the ego's road scene, m.
 MAX_ABS_D_M = 20.0
@@ -253,10 +253,12 @@ class RoadView:
             os_, od, o_rel, o_len, o_wid, o_vel = os_[keep], od[keep], o_rel[keep], o_len[keep], o_wid[keep], o_vel[keep]
             # a person or cyclist in or at the ego's lanes counts as grown by vru_margin_m all round (one
             # on the sidewalk beside them is behind the bound, as above: the ego passes it, not crawls), a
-            # person on a walkway by its share of it (perception._weight)
-            grow = 2.0 * vru_margin_m * np.asarray(vru, float)[keep]
-            o_len, o_wid = o_len + grow, o_wid + grow
+            # person on a walkway by its share of it (perception._weight) while it walks towards the ego's
+            # path; one walking along the kerb is passed at its size (signal_crossing_right, radar, seed 1:
+            # pushed 0.65 m over by people walking on the sidewalk, the ego met a car in the next lane)
             vs, vd = self.frame.velocity_to_frenet(os_, od, o_vel)
+            grow = 2.0 * vru_margin_m * towards_path(np.asarray(vru, float)[keep], vd * np.sign(d_raw - od))
+            o_len, o_wid = o_len + grow, o_wid + grow
             od, o_rel, o_vel = self._from_line(os_, od, o_rel, np.column_stack([vs, vd]))
             o_pos = np.column_stack([os_, od])
         else:

@@ -120,6 +120,16 @@ def _weight(vru, kerb, vel) -> np.ndarray:
     return np.where(vru, np.where(kerb, np.where(walking, KERB_WALKING, 0.0), 1.0), 0.0)
 
 
+def towards_path(share, closing_mps) -> np.ndarray:
+    """(N,) the VRU margin's share (:func:`_weight`) once the controller knows each road user's speed
+    towards the ego's path across the road (``closing_mps``): a person on a walkway keeps its share only
+    while it walks towards the path faster than :data:`KERB_STAND_MPS`; walking along the kerb it is passed
+    at its size, like one standing there."""
+    share = np.asarray(share, float)
+    kerb = (share > 0.0) & (share < 1.0)
+    return np.where(kerb & (np.asarray(closing_mps, float) <= KERB_STAND_MPS), 0.0, share)
+
+
 def _obstacles_of(det, vid: str, along):
     """One scan's returns of ego ``vid`` as boxes (a car's; a labelled person's or cyclist's
     :data:`VRU_LENGTH_M` x :data:`VRU_WIDTH_M`) and their VRU marks (not on a walkway)."""

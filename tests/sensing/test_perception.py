@@ -30,3 +30,15 @@ def test_people_on_sidewalks_and_walking_areas_are_off_the_carriageway():
     assert vru.tolist() == [1.0, 0.5, 0.5, 1.0, 0.0]  # walking there: half the margin
     *_, vru = obstacle_vehicles(obs, 0, pos[0], 50.0)  # no walkways known: every person and cyclist
     assert vru.tolist() == [1.0, 1.0, 1.0, 1.0, 0.0]
+
+
+def test_a_person_walking_along_the_kerb_is_passed_at_its_size():
+    from sumo_avoid.sensing.perception import towards_path
+
+    # shares (perception._weight): on the carriageway 1, walking on a walkway 0.5, standing there 0, a car 0;
+    # their speeds towards the ego's path across the road, m/s
+    share = np.array([1.0, 0.5, 0.5, 0.5, 0.0, 0.0])
+    closing = np.array([0.0, 0.0, 0.2, 0.3, -1.0, 2.0])
+    # along the kerb (0, and at most 0.2 m/s towards it): no margin; walking up to the road (0.3): its half; on the
+    # carriageway a person keeps the whole margin whichever way it walks; no margin for a car
+    assert towards_path(share, closing).tolist() == [1.0, 0.0, 0.0, 0.5, 0.0, 0.0]
