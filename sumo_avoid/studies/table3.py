@@ -5,9 +5,11 @@ its statistics beside the paper's.
 Per speed, into ``OUT/v{V}/``, exactly ``sumo-avoid tune flocking scenarios/arena_v{V}.toml`` with the
 budget flags (every evaluation a batch run in that folder's ledger: a killed study resumes by re-running
 the command). The best candidate and the paper's Table 3 parameters (the scenario's preset) are then
-evaluated on the same R fresh seeds. Writes ``table3.csv`` (``v_flock, quantity, ours, ours_lo,
-ours_hi, paper, paper_lo, paper_hi``), ``table3.md`` (side by side, with the command, the budget and
-how far the paper's μ̄ and μ_max are missed, if they are) and ``convergence.png`` (one panel per speed).
+evaluated on the same R fresh seeds. ``--start-from scenario`` warm-starts each speed's GA from the
+paper's parameters (generation 0's first individual; ``tune flocking --start-from``). Writes
+``table3.csv`` (``v_flock, quantity, ours, ours_lo, ours_hi, paper, paper_lo, paper_hi``), ``table3.md``
+(side by side, with the command, the budget and how far the paper's μ̄ and μ_max are missed, if they
+are) and ``convergence.png`` (one panel per speed).
 """
 from __future__ import annotations
 
@@ -45,6 +47,9 @@ def add_arguments(r) -> None:
     g.add_argument("--search-seed", type=int, default=1, help="table3: the GA's random seed (default 1)")
     g.add_argument("--speeds", type=int, nargs="+", default=list(SPEEDS), choices=SPEEDS,
                    help="table3: v_flock values (default 4 6 8)")
+    g.add_argument("--start-from", default="random", metavar="random|scenario",
+                   help="table3: generation 0 all random (default), or 'scenario': with the paper's Table 3 "
+                        "parameters (the arena's preset) as one individual: can the GA improve on them in SUMO?")
 
 
 def tune_args(args, v: int, out: pathlib.Path) -> argparse.Namespace:
@@ -54,7 +59,8 @@ def tune_args(args, v: int, out: pathlib.Path) -> argparse.Namespace:
         controller="flocking", scenario=ROOT / "scenarios" / f"arena_v{v}.toml", generations=args.generations,
         seeds=args.tune_seeds, first_seed=args.tune_first_seed, seed=args.search_seed, overrides=sets,
         workers=args.workers, scheduler=args.scheduler, ledger=None, out=out / f"v{v}", quiet=False,
-        pop_size=args.pop_size, bound=[], evals=args.seeds, eval_first_seed=args.first_seed)
+        pop_size=args.pop_size, bound=[], evals=args.seeds, eval_first_seed=args.first_seed,
+        start_from=args.start_from)
 
 
 def rows_of(v: int, s: dict) -> list[dict]:
@@ -170,11 +176,13 @@ def run(args) -> int:
                f"--duration {args.duration:g} --generations {args.generations} --pop-size {args.pop_size} "
                f"--tune-seeds {args.tune_seeds} --tune-first-seed {args.tune_first_seed} --search-seed "
                f"{args.search_seed} --seeds {args.seeds} --first-seed {args.first_seed}"
-               + "".join(f" --set {s}" for s in args.overrides) + f" --out {out}")
+               + "".join(f" --set {s}" for s in args.overrides)
+               + ("" if args.start_from == "random" else f" --start-from {args.start_from}") + f" --out {out}")
     settings = (f"Budget per speed: GA population {args.pop_size}, generations {args.generations} (+ the initial one), "
-                f"K = {args.tune_seeds} tuning seeds from {args.tune_first_seed}, search seed {args.search_seed}; "
-                f"R = {args.seeds} fresh seeds from {args.first_seed}; N = {args.agents} vehicles, {args.duration:g} s"
-                f" per run" + (f", overrides {list(args.overrides)}" if args.overrides else "")
+                f"K = {args.tune_seeds} tuning seeds from {args.tune_first_seed}, search seed {args.search_seed}"
+                + ("" if args.start_from == "random" else ", generation 0 warm-started with the paper's parameters")
+                + f"; R = {args.seeds} fresh seeds from {args.first_seed}; N = {args.agents} vehicles, "
+                f"{args.duration:g} s per run" + (f", overrides {list(args.overrides)}" if args.overrides else "")
                 + ". The paper: 100 vehicles, 600 s, its GA's budget not stated (N(μ ≥ μ̄) ≈ 2000 candidates).")
     write_md(stats, out, command, settings)
     plot(gens, stats, out / "convergence.png")

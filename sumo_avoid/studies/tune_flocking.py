@@ -1,7 +1,8 @@
 """``sumo-avoid tune flocking``: seed 000's genetic algorithm (SPEC §1.4) over the flocking model's 11
 parameters, on the shared tuning engine (:mod:`sumo_avoid.studies.tune`).
 
-The GA is pymoo's real-coded GA over the unit cube [0, 1]^11: random initial population, binary
+The GA is pymoo's real-coded GA over the unit cube [0, 1]^11: random initial population (or, with a
+warm start, :class:`WarmStart`, the scenario's own parameters as its first individual), binary
 tournament selection, simulated binary crossover (SBX, p 0.9, eta 15), polynomial mutation (eta 20),
 duplicates eliminated, and (mu + lambda) survival of the fittest (elitism: the best candidate is never
 lost). Each unit coordinate maps onto its parameter's bounds, linearly or, where the bounds span a
@@ -51,6 +52,7 @@ POSITIVE_FLOOR = 0.05
 WIDEN = 0.25
 LOG_RATIO = 10.0
 FAILED_MU = 0.0
+START_FROM = ("random", "scenario")  # --start-from: generation 0 all random, or the scenario's parameters in it
 
 
 @dataclass(frozen=True)
@@ -128,6 +130,38 @@ def values(unit, space: tuple[Bound, ...]) -> np.ndarray:
     return out
 
 
+@dataclass(frozen=True)
+class WarmStart:
+    """A point put into generation 0 as its first individual: ``unit`` its coordinates in [0, 1]^D (in the
+    search space's order); ``clipped`` (name, value, LO, HI) of each value that lay outside its bounds."""
+
+    unit: tuple[float, ...]
+    clipped: tuple[tuple[str, float, float, float], ...] = ()
+
+    def note(self) -> str:
+        """The clipped values in one line ('' if none)."""
+        return "; ".join(f"{n} = {v:g} lies outside its bounds [{lo:g}, {hi:g}], clipped to {min(max(v, lo), hi):g}"
+                         for n, v, lo, hi in self.clipped)
+
+
+def warm_start(params, space: tuple[Bound, ...]) -> WarmStart:
+    """``params`` (e.g. the scenario's FlockingParams: an attribute per tuned key) in the unit cube: the
+    inverse of :func:`values`, linear or log as the bound is searched; a value outside [LO, HI] is clipped
+    to the nearer bound first (so :func:`values` gives back the bound)."""
+    unit, clipped = [], []
+    for b in space:
+        v = float(getattr(params, b.name))
+        c = min(max(v, b.lo), b.hi)
+        if c != v:
+            clipped.append((b.name, v, b.lo, b.hi))
+        if b.log:
+            u = (math.log10(c) - math.log10(b.lo)) / (math.log10(b.hi) - math.log10(b.lo))
+        else:
+            u = (c - b.lo) / (b.hi - b.lo)
+        unit.append(min(max(u, 0.0), 1.0))
+    return WarmStart(tuple(unit), tuple(clipped))
+
+
 def overrides(row, space: tuple[Bound, ...], fixed: tuple[str, ...]) -> tuple[str, ...]:
     """A candidate's ``--set`` overrides: ``fixed`` (the preset cleared, v_flock and v_max kept) and the values."""
     return fixed + tuple(f"controllers.flocking.{b.name}={float(v)!r}" for b, v in zip(space, row))
@@ -157,16 +191,20 @@ def make_ga(dim: int, pop_size: int, seed: int) -> GA:
 
 
 def search(ev, space: tuple[Bound, ...], fixed: tuple[str, ...], generations: int, pop_size: int, seed: int,
-           bar=None) -> tuple[list[dict], list[dict]]:
+           bar=None, start: WarmStart | None = None) -> tuple[list[dict], list[dict]]:
     """Generation 0 (the initial population) and ``generations`` more, each its offspring evaluated as one
-    batch. Returns the history (every candidate: generation, values, mu) and the generation rows (the
-    population after survival: best, mean, worst μ, the best candidate's values)."""
+    batch. ``start``: generation 0's first individual is that point instead of its random draw (the
+    random stream and the other individuals are those of a search without it). Returns the history
+    (every candidate: generation, values, mu) and the generation rows (the population after survival:
+    best, mean, worst μ, the best candidate's values)."""
     algo = make_ga(len(space), pop_size, seed)
     hist: list[dict] = []
     gens: list[dict] = []
     names = [b.name for b in space]
     for gen in range(generations + 1):
         pop = algo.ask()
+        if gen == 0 and start is not None:
+            pop[0].set("X", np.asarray(start.unit, float))
         vals = values(pop.get("X"), space)
         mus = ev([overrides(v, space, fixed) for v in vals])
         pop.set("F", -np.asarray(mus, float)[:, None])

@@ -3,15 +3,19 @@
 the best candidate and the scenario's own parameters each evaluated on ``--evals`` R seeds from
 ``--eval-first-seed`` (seeds the tuner never saw; every run in the same ledger). Writes ``tuned.toml``
 (a ``[controllers.flocking]`` table to paste into a scenario), ``history.csv`` (every candidate),
-``evaluations.csv`` (the fresh runs per seed), ``statistics.json`` and ``statistics.md``.
+``evaluations.csv`` (the fresh runs per seed), ``statistics.json`` and ``statistics.md``. With
+``--start-from scenario`` generation 0's first individual is the scenario's own parameters (a warm start,
+:class:`sumo_avoid.studies.tune_flocking.WarmStart`); the recorded command then names the flag.
 """
 from __future__ import annotations
 
 import math
 import pathlib
+import sys
 
 import pandas as pd
 
+from sumo_avoid.control.flocking.terms import FlockingParams
 from sumo_avoid.scenario import spec as scenario
 from sumo_avoid.studies import tune_flocking as ga
 from sumo_avoid.studies import tune_stats
@@ -31,6 +35,11 @@ def add_arguments(t) -> None:
     g.add_argument("--evals", type=int, default=20, help="R fresh evaluations of the best candidate (and of the "
                                                          "scenario's parameters) on unseen seeds (default 20)")
     g.add_argument("--eval-first-seed", type=int, default=1, help="the R fresh seeds start here (default 1)")
+    g.add_argument("--start-from", default="random", metavar="random|scenario",
+                   help="generation 0: all random (default), or 'scenario': a warm start, the scenario's own "
+                        "[controllers.flocking] values (the arena_v* scenarios: the paper's Table 3 optimum) as one "
+                        "individual (a value outside its bound clipped, said on stderr), the rest random as without "
+                        "it: can the GA improve on them?")
 
 
 def _bound_triples(args, error) -> list:
@@ -56,17 +65,21 @@ def check(args, error) -> None:
         error("--eval-first-seed", f"fresh seeds the tuner never saw (it tunes on {tuning.start}.."
                                    f"{tuning.stop - 1})", f"{fresh.start}..{fresh.stop - 1}")
     _bound_triples(args, error)
+    if args.start_from not in ga.START_FROM:
+        error("--start-from", " or ".join(ga.START_FROM), args.start_from)
 
 
-def space_of(args, sets) -> tuple[tuple[ga.Bound, ...], tuple[str, ...]]:
-    """The search space and the fixed overrides (scenario loaded with ``sets``; raises ScenarioError)."""
+def space_of(args, sets) -> tuple[tuple[ga.Bound, ...], tuple[str, ...], FlockingParams]:
+    """The search space, the fixed overrides and the scenario's flocking parameters (scenario loaded with
+    ``sets``; raises ScenarioError)."""
     scn = scenario.load(args.scenario, list(sets), controller="flocking", seed=args.first_seed)
     space = ga.bounds(_bound_triples(args, None), scn.spec.tune.get("flocking", {}), str(args.scenario))
-    return space, ga.fixed_overrides(scn.controller_params["flocking"])
+    params = scn.controller_params["flocking"]
+    return space, ga.fixed_overrides(params), params
 
 
 def probe(args, sets) -> tuple[str, ...]:
-    space, fixed = space_of(args, sets)
+    space, fixed, _ = space_of(args, sets)
     return ga.overrides(ga.values([[0.5] * len(space)], space)[0], space, fixed)
 
 
@@ -86,6 +99,7 @@ def shown(path) -> str:
 def command(args) -> str:
     extra = "".join(f" --bound {n} {lo} {hi}" for n, lo, hi in args.bound)
     extra += "".join(f" --set {s}" for s in args.overrides)
+    extra += "" if args.start_from == "random" else f" --start-from {args.start_from}"  # the default as before
     return (f"sumo-avoid tune flocking {shown(args.scenario)} --generations {args.generations} "
             f"--pop-size {args.pop_size} "
             f"--seeds {args.seeds} --first-seed {args.first_seed} --seed {args.seed} --evals {args.evals} "
@@ -101,9 +115,12 @@ def tuned_toml(best: dict, names, head: str, params) -> str:
 
 def run(args, ev, bar) -> dict:
     sets = ev.sets
-    space, fixed = space_of(args, sets)
+    space, fixed, params = space_of(args, sets)
     names = [b.name for b in space]
-    hist, gens = ga.search(ev, space, fixed, args.generations, args.pop_size, args.seed, bar)
+    warm = ga.warm_start(params, space) if args.start_from == "scenario" else None
+    if warm is not None and warm.clipped:
+        bar.write(f"tune: --start-from scenario: {warm.note()}", file=sys.stderr)
+    hist, gens = ga.search(ev, space, fixed, args.generations, args.pop_size, args.seed, bar, warm)
     hist = pd.DataFrame(hist)
     top = ga.best_of(hist)
     best = {n: float(top[n]) for n in names}
@@ -129,6 +146,7 @@ def run(args, ev, bar) -> dict:
           f"{stats['n_above_mean']}")
     return {"history": hist, "generations": pd.DataFrame(gens), "value": "mu", "minimise": False,
             "ylabel": "mu (mean over the K tuning seeds)",
-            "title": f"GA, {args.scenario.name}: population {args.pop_size}, K={args.seeds}, seed {args.seed}",
+            "title": f"GA, {args.scenario.name}: population {args.pop_size}, K={args.seeds}, seed {args.seed}"
+                     + ("" if warm is None else ", generation 0 with the scenario's parameters"),
             "summary": f"best fitness {top['mu']:.4f} after {args.generations} generations, {len(hist)} candidates x "
                        f"{args.seeds} seeds" + ("" if math.isfinite(top["mu"]) else " (no finite mu)")}

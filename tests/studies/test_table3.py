@@ -1,5 +1,7 @@
 """``sumo-avoid reproduce table3``: a tiny version on real libsumo (5 vehicles, 3 s, a population of 3 over
-one generation) writes Table 3 beside the paper's numbers from the per-speed tunings; bad flags as one line."""
+one generation) writes Table 3 beside the paper's numbers from the per-speed tunings; ``--start-from`` goes
+through to each speed's tuner (a tiny warm-started speed starts from the paper's parameters); bad flags as
+one line."""
 from __future__ import annotations
 
 import json
@@ -8,7 +10,9 @@ import pandas as pd
 import pytest
 from conftest import assert_refused, cli_in_process
 
-from sumo_avoid.cli import main
+from sumo_avoid.cli import _parser, main
+from sumo_avoid.control.flocking.terms import PRESETS
+from sumo_avoid.studies import table3
 from sumo_avoid.studies.tune_flocking import PARAMS
 
 TINY = ["--agents", "5", "--duration", "3", "--generations", "1", "--pop-size", "3", "--tune-seeds", "1",
@@ -52,7 +56,24 @@ def test_tiny_table3_puts_each_speeds_tuning_beside_the_paper(tmp_path):
     (["--seeds", "1"], "--evals"),  # R fresh seeds: at least 2 (a mean and an sd)
     (["--tune-first-seed", "5"], "--eval-first-seed"),  # the tuning seeds 5..7 overlap the fresh seeds 1..20
     (["--set", "controllers.flocking.nope=1"], "controllers.flocking.nope"),
+    (["--start-from", "paper"], "--start-from"),  # random or scenario
 ])
 def test_bad_table3_input_is_one_line(tmp_path, extra, key):
     r = cli_in_process("reproduce", "table3", *extra, "--out", tmp_path / "out")
     assert_refused(r, key, tmp_path / "out")
+
+
+def test_table3_passes_start_from_to_each_speeds_tuner(tmp_path):
+    for given, want in (([], "random"), (["--start-from", "scenario"], "scenario")):
+        args = _parser().parse_args(["reproduce", "table3", *given])
+        assert [table3.tune_args(args, v, tmp_path).start_from for v in (4, 6, 8)] == [want] * 3
+
+
+def test_a_tiny_warm_started_table3_starts_from_the_papers_parameters(tmp_path):
+    out = tmp_path / "t3"
+    assert main(["reproduce", "table3", *TINY, "--speeds", "4", "--start-from", "scenario", "--out", str(out)]) == 0
+    hist = pd.read_csv(out / "v4" / "history.csv")
+    assert len(hist) == 6 and hist.loc[0, list(PARAMS)].tolist() == [PRESETS["paper_v4"][n] for n in PARAMS]
+    assert json.loads((out / "v4" / "statistics.json").read_text())["command"].endswith("--start-from scenario")
+    md = (out / "table3.md").read_text()
+    assert "--start-from scenario --out" in md and "generation 0 warm-started with the paper's parameters" in md
