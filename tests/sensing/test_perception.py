@@ -4,6 +4,7 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from sumo_avoid.core.snapshot import Snapshot
 from sumo_avoid.sensing.perception import obstacle_vehicles
@@ -42,3 +43,23 @@ def test_a_person_walking_along_the_kerb_is_passed_at_its_size():
     # along the kerb (0, and at most 0.2 m/s towards it): no margin; walking up to the road (0.3): its half; on the
     # carriageway a person keeps the whole margin whichever way it walks; no margin for a car
     assert towards_path(share, closing).tolist() == [1.0, 0.0, 0.0, 0.5, 0.0, 0.0]
+
+
+def test_a_person_at_the_kerb_moves_only_as_the_radar_measures():
+    from sumo_avoid.core.types import Detections
+    from sumo_avoid.sensing.perception import radial_velocity, velocity_estimate
+
+    # the ego at 10 m/s along +x; returns 70 degrees off its heading, 4 m away: a person standing (radial speed
+    # -10 cos 70 = -3.420 m/s) and one walking straight away from the radar at 1.2 m/s (-3.420 + 1.2)
+    a = np.radians(70.0)
+    det = Detections(0.0, ("ego",), np.zeros((1, 2)), np.zeros(1), np.array([[10.0, 0.0]]), np.zeros(2, int),
+                     np.full(2, 4.0), np.full(2, a), np.array([-10.0 * np.cos(a), -10.0 * np.cos(a) + 1.2]))
+    v = radial_velocity(det, np.arange(2))
+    assert v[0] == pytest.approx([0.0, 0.0], abs=1e-12)
+    assert v[1] == pytest.approx(1.2 * np.array([np.cos(a), np.sin(a)]))
+    # the traffic-direction guess divides a radial error by cos 70 = 0.342: 0.1 m/s of noise on the standing
+    # person becomes 0.29 m/s along the road (Bologna, radar: 3.65 m/s from a standing person beside a turning ego)
+    noisy = Detections(0.0, ("ego",), np.zeros((1, 2)), np.zeros(1), np.array([[10.0, 0.0]]), np.zeros(1, int),
+                       np.full(1, 4.0), np.full(1, a), np.array([-10.0 * np.cos(a) + 0.1]))
+    assert np.hypot(*velocity_estimate(noisy, np.arange(1), 0.0)[0]) == pytest.approx(0.1 / np.cos(a))
+    assert np.hypot(*radial_velocity(noisy, np.arange(1))[0]) == pytest.approx(0.1)

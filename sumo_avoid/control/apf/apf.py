@@ -196,14 +196,17 @@ class ApfDriver:
             slow = np.tile(np.hypot(*sc.o_vel.T), C) <= p.squeeze_speed_mps
             crawl = squeeze | (slow & self._turned_towards(h, beside, side, (e_lo, e_hi), (o_lo, o_hi), lat_closing))
             beside = beside | squeeze
-            # one squeezed past pushes straight across the road, away from it (its corner just ahead of the
-            # ego's front face is nearest along the road, and along the road it pushes no car beside it),
-            # from as far as the car needs to move over by the shift at its turning radius (wildau_turns: a
-            # left-turner waiting inside the junction 0.24 m into the ego's strip pushed only within 1 m,
-            # the ego crawled up to it without moving over and stood there for good)
-            away = np.where(squeeze[:, None], np.column_stack([np.zeros(C * O), -side]), away)
+            # one squeezed past that the ego must move over for (shift > 0) pushes straight across the road,
+            # away from it (its corner just ahead of the ego's front face is nearest along the road, and along
+            # the road it pushes no car beside it), from as far as the car needs to move over by the shift at
+            # its turning radius (wildau_turns: a left-turner waiting inside the junction 0.24 m into the ego's
+            # strip pushed only within 1 m, the ego crawled up to it without moving over and stood there for
+            # good); one it clears already is passed as before (pushed across it swerved the ego towards a
+            # bus in the oncoming lane: bologna_bus_lane, radar, seed 3, a person's box at the kerb)
+            over = squeeze & (shift > 0.0)
+            away = np.where(over[:, None], np.column_stack([np.zeros(C * O), -side]), away)
             move = np.zeros(C * O)
-            move[squeeze] = [lane_change_length_m(x, self.steering[0]) for x in shift[squeeze]]
+            move[over] = [lane_change_length_m(x, self.steering[0]) for x in shift[over]]
             # its influence distance is the clearance kept beside a car plus the lateral stopping
             # distance of its closing speed: the ego's own speed (the headway term, for following)
             # does not count, so a lane-centred car in the next lane does not push the ego at all
