@@ -20,6 +20,8 @@ ASSUMED_LENGTH_M = 4.5
 ASSUMED_WIDTH_M = 1.8
 #: A person on a sidewalk or walking area walking (at least KERB_STAND_MPS) gets this share of the VRU margin.
 KERB_WALKING, KERB_STAND_MPS = 0.5, 0.2
+#: ... its motion is read from the radar only within acos(this) = 60 degrees of the traffic's direction.
+KERB_MIN_COS = 0.5
 #: A return labelled a person or cyclist is a box of a cyclist's size (a person fits in it), m.
 VRU_LENGTH_M, VRU_WIDTH_M = 1.8, 0.8
 #: A return this close (m) across (along) the box's axis from the sensor is taken to lie on the
@@ -141,24 +143,24 @@ def _obstacles_of(det, vid: str, along):
         j = np.flatnonzero(small)
         pos[j], hd[j], ln[j], wd[j], vel[j] = perceived_boxes(det, k[j], along, VRU_LENGTH_M, VRU_WIDTH_M)
         w = np.flatnonzero(small & kerb)
-        if len(w):  # a person at the kerb need not move along the traffic: only what the radar measures
-            vel[w] = radial_velocity(det, k[w])
+        if len(w):  # a person at the kerb seen far off the traffic's direction: its motion is not known
+            vel[w[~observable(det, k[w], along)]] = 0.0
     return pos, hd, ln, wd, vel, _weight(small, kerb, vel)
 
 
-def radial_velocity(det, k) -> np.ndarray:
-    """(D,2) world velocity of returns ``k`` from their radial speed alone: along the line of sight u at
-    the speed v_r + v_ego . u that the measured radial speed v_r leaves once the ego's own motion is taken
-    out (the tangential part, unobservable, taken as 0: a standing person stands). For a person
-    on a walkway, who may walk any way: :func:`velocity_estimate`'s guess along the traffic's direction
-    divides the radial speed by cos(angle off that direction), which beside the ego (up to 73 degrees off)
-    makes a standing person's noise 3.65 m/s walking towards the ego's path (bologna_bus_lane, radar,
-    seed 3: it pushed the ego towards a bus in the oncoming lane)."""
+def observable(det, k, along=None, min_cos: float = KERB_MIN_COS) -> np.ndarray:
+    """(D,) bool: is the motion along the traffic's direction (``along``, else the boresight) of returns
+    ``k`` observable from their radial speed -- the line of sight within acos(``min_cos``) of it?
+    :func:`velocity_estimate` divides the radial speed by that cosine; for a person at the kerb beside
+    the ego (up to 73 degrees off) it turned a standing person's noise into 3.65 m/s walking towards the
+    ego's path (bologna_bus_lane, radar, seed 3: the margin it kept pushed the ego towards a bus in the
+    oncoming lane). Taking its velocity from the line of sight instead misreads people walking along the
+    sidewalk ahead as walking towards the road (signal_crossing_right, radar, seed 5); beyond the bound
+    a person at the kerb is taken to stand (it keeps no margin; the crossing rule watches the crossings)."""
     e = det.ego[k]
+    h = det.sensor_heading[e] if along is None else np.broadcast_to(np.asarray(along, float), e.shape)
     a = det.sensor_heading[e] + det.azimuth_rad[k]
-    u = np.column_stack([np.cos(a), np.sin(a)])
-    speed = det.radial_speed_mps[k] + (det.sensor_vel[e] * u).sum(1)
-    return speed[:, None] * u
+    return np.abs(np.cos(a - h)) >= min_cos
 
 
 def radar_obstacles(obs, known_pos, gate_m: float):

@@ -45,21 +45,21 @@ def test_a_person_walking_along_the_kerb_is_passed_at_its_size():
     assert towards_path(share, closing).tolist() == [1.0, 0.0, 0.0, 0.5, 0.0, 0.0]
 
 
-def test_a_person_at_the_kerb_moves_only_as_the_radar_measures():
+def test_a_person_at_the_kerb_far_off_the_traffic_direction_is_taken_to_stand():
     from sumo_avoid.core.types import Detections
-    from sumo_avoid.sensing.perception import radial_velocity, velocity_estimate
+    from sumo_avoid.sensing.perception import obstacle_vehicles, observable, velocity_estimate
 
-    # the ego at 10 m/s along +x; returns 70 degrees off its heading, 4 m away: a person standing (radial speed
-    # -10 cos 70 = -3.420 m/s) and one walking straight away from the radar at 1.2 m/s (-3.420 + 1.2)
-    a = np.radians(70.0)
+    # the ego at 10 m/s along +x (the traffic's direction); a standing person at 70 degrees off, its radial speed
+    # -10 cos 70 + 0.1 m/s of noise, and one at 40 degrees off walking along the road at -1.2 m/s
+    a = np.radians([70.0, 40.0])
+    vr = -10.0 * np.cos(a) + np.array([0.1, -1.2 * np.cos(a[1])])
     det = Detections(0.0, ("ego",), np.zeros((1, 2)), np.zeros(1), np.array([[10.0, 0.0]]), np.zeros(2, int),
-                     np.full(2, 4.0), np.full(2, a), np.array([-10.0 * np.cos(a), -10.0 * np.cos(a) + 1.2]))
-    v = radial_velocity(det, np.arange(2))
-    assert v[0] == pytest.approx([0.0, 0.0], abs=1e-12)
-    assert v[1] == pytest.approx(1.2 * np.array([np.cos(a), np.sin(a)]))
-    # the traffic-direction guess divides a radial error by cos 70 = 0.342: 0.1 m/s of noise on the standing
-    # person becomes 0.29 m/s along the road (Bologna, radar: 3.65 m/s from a standing person beside a turning ego)
-    noisy = Detections(0.0, ("ego",), np.zeros((1, 2)), np.zeros(1), np.array([[10.0, 0.0]]), np.zeros(1, int),
-                       np.full(1, 4.0), np.full(1, a), np.array([-10.0 * np.cos(a) + 0.1]))
-    assert np.hypot(*velocity_estimate(noisy, np.arange(1), 0.0)[0]) == pytest.approx(0.1 / np.cos(a))
-    assert np.hypot(*radial_velocity(noisy, np.arange(1))[0]) == pytest.approx(0.1)
+                     np.full(2, 4.0), a, vr, vru=np.array([True, True]), walkway=np.array([True, True]))
+    # the guess along the traffic divides by cos 70 = 0.342: the noise becomes 0.29 m/s along the road
+    assert np.hypot(*velocity_estimate(det, np.arange(1), 0.0)[0]) == pytest.approx(0.1 / np.cos(a[0]))
+    assert observable(det, np.arange(2), 0.0).tolist() == [False, True]  # cos 70 < 0.5 <= cos 40
+    obs = SimpleNamespace(snapshot=SimpleNamespace(ids=("ego",)), detections=(det,), route_heading=np.array([0.0]),
+                          index=lambda v: 0)
+    *_, vel, share = obstacle_vehicles(obs, 0, np.zeros(2), 50.0)
+    assert vel[0].tolist() == [0.0, 0.0] and share[0] == 0.0  # taken to stand at the kerb: its size
+    assert vel[1] == pytest.approx([-1.2, 0.0]) and share[1] == 0.5  # walking, read along the road
