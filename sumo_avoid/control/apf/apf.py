@@ -183,30 +183,9 @@ class ApfDriver:
             closing = np.maximum(np.einsum("ij,ij->i", v_rel, towards), 0.0)
             # a vehicle beside the ego's lane strip (no overlap across the road, e.g. oncoming in
             # its own lane, or slower in the next lane) is felt from its closing speed across the
-            # road only: passing it is no threat, drifting towards it is
-            # road; a standing one the ego can steer clear of in time within its lanes is passed the
-            # same way, at a crawl (_squeeze, the governor)
-            e_lo, e_hi = np.repeat(ego_corners[..., 1].min(1), O), np.repeat(ego_corners[..., 1].max(1), O)
-            o_lo, o_hi = np.tile(oc[..., 1].min(1), C), np.tile(oc[..., 1].max(1), C)
-            side = np.sign(np.tile(sc.o_pos[:, 1], C) - np.repeat(q_cand[:, 1], O))
-            lat_closing = np.maximum(v_rel[:, 1] * side, 0.0)
-            beside = (e_lo - p.gov_margin_m > o_hi) | (e_hi + p.gov_margin_m < o_lo)
-            passable, shift = self._squeeze(sc, q_cand, oc, (o_lo, o_hi), side, lat_closing)
-            squeeze = ~beside & passable
-            slow = np.tile(np.hypot(*sc.o_vel.T), C) <= p.squeeze_speed_mps
-            crawl = squeeze | (slow & self._turned_towards(h, beside, side, (e_lo, e_hi), (o_lo, o_hi), lat_closing))
-            beside = beside | squeeze
-            # one squeezed past that the ego must move over for (shift > 0) pushes straight across the road,
-            # away from it (its corner just ahead of the ego's front face is nearest along the road, and along
-            # the road it pushes no car beside it), from as far as the car needs to move over by the shift at
-            # its turning radius (wildau_turns: a left-turner waiting inside the junction 0.24 m into the ego's
-            # strip pushed only within 1 m, the ego crawled up to it without moving over and stood there for
-            # good); one it clears already is passed as before (pushed across it swerved the ego towards a
-            # bus in the oncoming lane: bologna_bus_lane, radar, seed 3, a person's box at the kerb)
-            over = squeeze & (shift > 0.0)
-            away = np.where(over[:, None], np.column_stack([np.zeros(C * O), -side]), away)
-            move = np.zeros(C * O)
-            move[over] = [lane_change_length_m(x, self.steering[0]) for x in shift[over]]
+            # road only: passing it is no threat, drifting towards it is; a standing one the ego can
+            # steer clear of in time within its lanes is passed the same way, at a crawl (_beside)
+            beside, crawl, away, move, lat_closing = self._beside(sc, q_cand, h, ego_corners, oc, v_rel, away)
             # its influence distance is the clearance kept beside a car plus the lateral stopping
             # distance of its closing speed: the ego's own speed (the headway term, for following)
             # does not count, so a lane-centred car in the next lane does not push the ego at all
@@ -241,6 +220,35 @@ class ApfDriver:
             Ur, Fr = repulsion(rho, np.tile([0.0, inward], (C, 1)), np.full(C, rho0), p.k_edge, rho_floor=0.05)
             U, F = U + Ur, F + Fr
         return Field(U, F, float(v_safe))
+
+    def _beside(self, sc: FrenetScene, q_cand, h: float, ego_corners, oc, v_rel, away):
+        """Per (candidate, vehicle) pair, (C*O,) each: which vehicles are beside the ego's strip (incl. those
+        squeezed past), which the governor passes at a crawl, the push direction ``away`` (across the road
+        for a squeeze the ego must move over for), the extra influence reach ``move`` that move takes, m, and
+        the closing speed across the road, m/s."""
+        p, C, O = self.p, len(q_cand), len(sc.o_pos)
+        e_lo, e_hi = np.repeat(ego_corners[..., 1].min(1), O), np.repeat(ego_corners[..., 1].max(1), O)
+        o_lo, o_hi = np.tile(oc[..., 1].min(1), C), np.tile(oc[..., 1].max(1), C)
+        side = np.sign(np.tile(sc.o_pos[:, 1], C) - np.repeat(q_cand[:, 1], O))
+        lat_closing = np.maximum(v_rel[:, 1] * side, 0.0)
+        beside = (e_lo - p.gov_margin_m > o_hi) | (e_hi + p.gov_margin_m < o_lo)
+        passable, shift = self._squeeze(sc, q_cand, oc, (o_lo, o_hi), side, lat_closing)
+        squeeze = ~beside & passable
+        slow = np.tile(np.hypot(*sc.o_vel.T), C) <= p.squeeze_speed_mps
+        crawl = squeeze | (slow & self._turned_towards(h, beside, side, (e_lo, e_hi), (o_lo, o_hi), lat_closing))
+        beside = beside | squeeze
+        # one squeezed past that the ego must move over for (shift > 0) pushes straight across the road,
+        # away from it (its corner just ahead of the ego's front face is nearest along the road, and along
+        # the road it pushes no car beside it), from as far as the car needs to move over by the shift at
+        # its turning radius (wildau_turns: a left-turner waiting inside the junction 0.24 m into the ego's
+        # strip pushed only within 1 m, the ego crawled up to it without moving over and stood there for
+        # good); one it clears already is passed as before (pushed across it swerved the ego towards a
+        # bus in the oncoming lane: bologna_bus_lane, radar, seed 3, a person's box at the kerb)
+        over = squeeze & (shift > 0.0)
+        away = np.where(over[:, None], np.column_stack([np.zeros(C * O), -side]), away)
+        move = np.zeros(C * O)
+        move[over] = [lane_change_length_m(x, self.steering[0]) for x in shift[over]]
+        return beside, crawl, away, move, lat_closing
 
     def _squeeze(self, sc: FrenetScene, q_cand, oc, o_span, side, lat_closing):
         """((C*O,) bool, (C*O,) shift, m): the vehicle stands (or crawls) and does not close across the road, and the
