@@ -5,7 +5,8 @@ run without ``"traffic"`` in ``ego.layers`` is measured the same way, against th
 ``red_light_violations``: the ego's front bumper crosses a stop line (between two recorded steps)
 while its link shows 'r' / 'u' at the earlier step, or 'y' when, at the onset of that yellow, the
 ego could have stopped comfortably (v^2 / (2 b_comf) <= distance to the line, b_comf of the
-scenario's ``[layers.traffic]``). Details per crossing in ``signal_crossings`` (ego, tls, link, time, state).
+scenario's ``[layers.traffic]``) and lawfully (not standing on a crossing it was already on:
+:func:`~sumo_avoid.road.crossings.stands_on_crossing`). Details per crossing in ``signal_crossings`` (ego, tls, link, time, state).
 
 ``yield_violations``: the ego's front bumper crosses the stop line of a link that must give way at
 that moment (:mod:`sumo_avoid.road.yielding`) while a recorded vehicle of a foe link with
@@ -35,6 +36,7 @@ from sumo_avoid.road.polyline import polyline_track
 from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.rollout.result import RunResult
+from sumo_avoid.road.crossings import stands_on_crossing
 from sumo_avoid.road.regulation import RED, STOP_SIGNS
 from sumo_avoid.road.yielding import (
     STAND_MPS,
@@ -99,7 +101,8 @@ def signal_crossings(run: RunResult) -> list[dict]:
             violation = c in RED
             if c == "y":
                 j = int(np.clip(np.searchsorted(t, since), 0, k))
-                violation = v[j] ** 2 / (2.0 * b) <= lk.s_stop_m - s[j]
+                violation = (v[j] ** 2 / (2.0 * b) <= lk.s_stop_m - s[j] and
+                             not stands_on_crossing(task.links, s[j], lk.s_stop_m, float(ego["length"].iloc[j])))
             out.append({"ego": vid, "tls": lk.tls, "link_index": lk.link_index, "time_s": float(t[k + 1]),
                         "state": c, "violation": bool(violation)})
     return out

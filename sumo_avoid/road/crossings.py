@@ -192,3 +192,12 @@ def people_may_cross(crossing: CrossingLink, signals) -> bool:
         return True
     state = signals.get(crossing.tls, "")
     return 0 <= crossing.link_index < len(state) and state[crossing.link_index] in PEOPLE_GREEN
+
+
+def stands_on_crossing(links, s_front_m: float, s_line_m: float, length_m: float) -> bool:
+    """Would a car ``length_m`` long, its front at ``s_front_m`` now, standing at the stop line ``s_line_m``
+    stand on a crossing it has already entered (a crossing that ends within its length before the line)?
+    Then no lawful stop is left at that line: at a yellow it clears the crossing and goes on (wildau_turns,
+    radar, seed 1: a light 2.9 m beyond a junction's crossing turned yellow while the ego was on it)."""
+    return any(c.s_enter_m <= s_front_m and s_line_m - length_m < c.s_exit_m <= s_line_m
+               for lk in links for c in lk.crossings)

@@ -8,7 +8,9 @@
   ``commit_decel_mps2`` at most; a crossing whose own signal is not green for the people (``G``/``g``)
   is not theirs to cross (:func:`~sumo_avoid.road.crossings.people_may_cross`);
 * never stop on a crossing: the ego does not enter a crossing while a vehicle or a person stands (slower
-  than :data:`QUEUE_MPS`) on its path within its own length plus :data:`ROOM_M` beyond the crossing, and
+  than :data:`QUEUE_MPS`) on its path within its own length plus :data:`ROOM_M` beyond the crossing, or a
+  vehicle going its way would stand there braking at :data:`LEAD_DECEL_MPS2` (a queue forming), or a
+  light not green holds it at a stop line there (:func:`light_beyond`), and
   when it waits before a crossing where it would stand on an earlier one (a turn over the crossings
   of its entry and exit arms, a car length apart or less) it waits before the earlier one.
 
@@ -27,31 +29,57 @@ import numpy as np
 
 from sumo_avoid.road.crossings import people_may_cross, persons_at
 from sumo_avoid.road.polyline import polyline_project_many
+from sumo_avoid.road.regulation import RED
 
+RED_OR_YELLOW = RED | frozenset("yY")  # a light beyond a crossing that will hold the ego (road.regulation)
 QUEUE_MPS = 1.0  # a vehicle slower than this beyond a crossing is standing in a queue, m/s
 ROOM_M = 1.0  # the ego enters a crossing only with its length + this free beyond it, m
 LANE_HALF_M = 1.6  # a vehicle this close to the ego's path (centre to path) is on it, m
+LEAD_DECEL_MPS2 = 4.5  # a vehicle ahead beyond a crossing could stop braking this hard (SUMO's default decel), m/s^2
 CLEAR_ACCEL_MPS2 = 1.5  # an ego over a crossing clears the next one speeding up at least this, m/s^2
 
 
 def room_beyond(crossing, path: np.ndarray, snap, ego_row: int, need_m: float) -> bool:
-    """Is the ego's path free of standing vehicles and people for ``need_m`` beyond the crossing? (People
-    waiting at a corner stand where SUMO's walking area meets the road, which a tight turn sweeps.)"""
-    exit_xy = np.array([np.interp(crossing.s_exit_m, _cum(path), path[:, 0]),
-                        np.interp(crossing.s_exit_m, _cum(path), path[:, 1])])
-    rows = np.flatnonzero((np.arange(snap.n) != ego_row) & (snap.speed < QUEUE_MPS))
+    """Is the ego's path free for ``need_m`` beyond the crossing, of vehicles and people standing there and
+    of vehicles going the path's way that would stand there if they braked now at :data:`LEAD_DECEL_MPS2`
+    (a queue forming: the car ahead still slowing down; SUMO's drivers judge a junction's exit by the
+    leader's brake gap the same way)? (People waiting at a corner stand where SUMO's walking area meets the
+    road, which a tight turn sweeps.)"""
+    cum = _cum(path)
+    exit_xy = np.array([np.interp(crossing.s_exit_m, cum, path[:, 0]), np.interp(crossing.s_exit_m, cum, path[:, 1])])
+    others = np.arange(snap.n) != ego_row
+    stop_gap = np.where(snap.is_person, 0.0, snap.speed**2 / (2.0 * LEAD_DECEL_MPS2))
+    reach = need_m + snap.length + LANE_HALF_M
+    rows = np.flatnonzero(others & ((snap.speed < QUEUE_MPS) | (stop_gap < reach)))
     if len(rows) == 0:
         return True
-    near = rows[np.hypot(*(snap.pos[rows] - exit_xy).T) <= need_m + snap.length[rows] + LANE_HALF_M]
+    near = rows[np.hypot(*(snap.pos[rows] - exit_xy).T) <= reach[rows]]
     if len(near) == 0:
         return True
     s = polyline_project_many(path, snap.pos[near])
-    cum = _cum(path)
     foot = np.column_stack([np.interp(s, cum, path[:, 0]), np.interp(s, cum, path[:, 1])])
     on_path = np.hypot(*(snap.pos[near] - foot).T) <= LANE_HALF_M
-    rear = s - 0.5 * snap.length[near]
-    blocking = on_path & (s > crossing.s_exit_m - 0.5) & (rear < crossing.s_exit_m + need_m)
+    # a moving one counts where its brake gap ends, if it goes the path's way (within 45 degrees of it)
+    k = np.clip(np.searchsorted(cum, s) - 1, 0, len(path) - 2)
+    tangent = path[k + 1] - path[k]
+    along = np.einsum("ij,ij->i", snap.vel[near], tangent) / np.maximum(np.hypot(*tangent.T), 1e-9)
+    standing = snap.speed[near] < QUEUE_MPS
+    slowing = ~standing & ~snap.is_person[near] & (along >= np.cos(np.pi / 4) * snap.speed[near])
+    rear = s - 0.5 * snap.length[near] + np.where(slowing, stop_gap[near], 0.0)
+    blocking = on_path & (standing | slowing) & (s > crossing.s_exit_m - 0.5) & (rear < crossing.s_exit_m + need_m)
     return not blocking.any()
+
+
+def light_beyond(crossing, links, signals, need_m: float) -> bool:
+    """Does a signal that is not green (red, red-yellow or yellow) hold the ego at a stop line within
+    ``need_m`` beyond the crossing? It would stand with its rear on the crossing (wildau_turns, radar,
+    seed 1: a 4 m edge between a junction's crossing and the next junction's light)."""
+    for link in links:
+        if link.tls and crossing.s_exit_m - 0.5 < link.s_stop_m <= crossing.s_exit_m + need_m:
+            state = signals.get(link.tls, "")
+            if 0 <= link.link_index < len(state) and state[link.link_index] in RED_OR_YELLOW:
+                return True
+    return False
 
 
 def _cum(path: np.ndarray) -> np.ndarray:
@@ -101,7 +129,8 @@ class CrossingRule:
             if persons_at(c, lanes, snap.pos[persons], snap.vel[persons], 0.5 * ego_width_m + p.crossing_margin_m,
                           p.crossing_gap_m, horizon_s, on_only=not people_may_cross(c, snap.signals)).any():
                 return True
-        return not room_beyond(c, task.path, snap, ego_row, ego_length_m + ROOM_M)
+        return (not room_beyond(c, task.path, snap, ego_row, ego_length_m + ROOM_M)
+                or light_beyond(c, task.links, snap.signals, ego_length_m + ROOM_M))
 
     def _wait_line(self, before, line: float, s_front: float, v: float, ego_length_m: float) -> float:
         """Where the ego waits for crossing entry ``line``: before it, or before an earlier crossing

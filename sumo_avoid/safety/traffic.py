@@ -53,6 +53,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from sumo_avoid.core.geometry import near_any
+from sumo_avoid.road.crossings import stands_on_crossing
 from sumo_avoid.road.polyline import polyline_point_at, polyline_track
 from sumo_avoid.road.regulation import RED, STOP_SIGNS, RulesParams
 from sumo_avoid.core.types import EgoTask, Keys
@@ -174,7 +175,7 @@ class TrafficRulesLayer:
     def remove_ego(self, vid: str) -> None:
         self._egos.pop(vid, None)
 
-    def _signal_cap(self, e: _Ego, signals, v: float) -> tuple[float, float]:
+    def _signal_cap(self, e: _Ego, signals, v: float, length_m: float) -> tuple[float, float]:
         """(speed cap, s of the stop line that sets it) over the signals ahead."""
         p, cap, line = self.p, math.inf, -1.0
         for k, link in enumerate(e.task.links):
@@ -187,8 +188,9 @@ class TrafficRulesLayer:
             if c == "y" and k not in e.yellow:
                 # the law's test, the metric's: a comfortable stop before the line itself (d is to
                 # the stop position, stop_margin_m before it; deciding on d would go on through yellows
-                # the metric judges stoppable)
-                e.yellow[k] = STOP if v * v / (2.0 * p.comfort_decel_mps2) <= d + p.stop_margin_m else GO
+                # the metric judges stoppable), and not standing on a crossing it is already on
+                e.yellow[k] = STOP if (v * v / (2.0 * p.comfort_decel_mps2) <= d + p.stop_margin_m and not
+                                       stands_on_crossing(e.task.links, e.s_m, link.s_stop_m, length_m)) else GO
             if c in RED or e.yellow.get(k) == STOP:
                 here = math.sqrt(2.0 * p.comfort_decel_mps2 * max(d, 0.0))
                 if here < cap:
@@ -256,7 +258,7 @@ class TrafficRulesLayer:
             e.s_m = float(polyline_track(e.task.path, front, e.s_m if e.seen else None)[0])
             e.seen = True
             v = abs(float(obs.ego_speed[i]))
-            sig, line = self._signal_cap(e, snap.signals, v)
+            sig, line = self._signal_cap(e, snap.signals, v, float(snap.length[r]))
             road = road_speed_cap(e.task, e.s_m, self.p)
             if sig < v or sig < 0.5:  # one episode per ego and stop line, however often the cap binds
                 self._held.add((vid, line))

@@ -4,8 +4,10 @@ A forward radar loses a car as soon as it is beside the ego (outside the field o
 when a lane change back would hit it. The tracker keeps each return for ``memory_s`` after it was
 last seen, coasting it at the velocity estimated from that return (:func:`.perception.velocity_estimate`:
 motion along the ego's heading that explains the radial speed) while it stays outside
-the field of view or beyond the range. A remembered return that should be visible now but is not
-matched by a new return within ``gate_m`` is dropped. No target ids are used.
+the field of view or beyond the range. A remembered return that should be visible now is dropped (the
+scan is trusted); one out of view that a new return within ``gate_m`` matches is replaced by it, unless it
+stands (:data:`STANDING_MPS`: the new return is then another part of the same object, the part still in
+view). No target ids are used.
 With rear and side radars too, one memory serves them all (see :meth:`Tracker.update`).
 Output: a :class:`~.radar.Detections` whose rows are the current returns followed by the coasted
 ones, range and azimuth recomputed from each ego's current sensor pose (azimuths may lie outside
@@ -22,6 +24,8 @@ from sumo_avoid.core.types import Detections
 from sumo_avoid.sensing.perception import velocity_estimate
 
 _EGO_SEPARATION_M = 1e6  # egos' returns are kept apart in the search tree along a third axis
+#: A remembered return estimated slower than this (m/s) stands: its coasted position is where it was seen.
+STANDING_MPS = 0.5
 
 
 def _near_same_ego(p, e, q, f, gate_m: float) -> np.ndarray:
@@ -79,8 +83,14 @@ class Tracker:
                 r, az, pred = self._polar(d, self._e, now)
                 half, rmax = self.views.get(d.mount, (self.half, self.max_range_m))
                 keep &= ~((np.abs(az) <= half) & (r <= rmax))
-            k = np.flatnonzero(keep)
-            if len(k) and len(e_new):  # re-observed (a new return of the same ego within gate_m): replaced
+            # re-observed (a new return of the same ego within gate_m): replaced -- unless it stands. Out of
+            # view, a standing return is where it was seen; a new return near it is another part of the
+            # same object that is still in view (the beam's edge cuts it): a car standing at an angle
+            # beside the ego's path, its near corner gone out of the front radar's view, returned only
+            # from its far end, which put its box 1.5 m too far away, and the ego touched the corner in
+            # passing (wildau_turns, radar, seeds 1-5)
+            k = np.flatnonzero(keep & (np.hypot(self._v[:, 0], self._v[:, 1]) >= STANDING_MPS))
+            if len(k) and len(e_new):
                 keep[k[_near_same_ego(pred[k], self._e[k], p_new, e_new, self.gate_m)]] = False
             k = np.flatnonzero(keep)
             self._e = np.concatenate([e_new, self._e[k]])
