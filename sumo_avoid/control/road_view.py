@@ -70,6 +70,7 @@ class FrenetScene:
     o_width: np.ndarray  # (O,)
     o_vel: np.ndarray  # (O, 2) (s_dot, d_dot), m/s
     corridor: Callable  # s (N,) -> (d_lo (N,), d_hi (N,)): bounds of the ego's lanes, m
+    o_grow: np.ndarray | None = None  # (O,) how much each one's length and width grew by its VRU margin, m (None: 0)
 
     @property
     def q(self) -> np.ndarray:
@@ -265,7 +266,8 @@ class RoadView:
             o_rel = np.zeros(0)
         return FrenetScene(s, d, float(h_rel[0]), vel[0],
                            float(snap.length[row]), float(snap.width[row]),
-                           o_pos.reshape(-1, 2), o_rel, o_len, o_wid, o_vel.reshape(-1, 2), self.corridor)
+                           o_pos.reshape(-1, 2), o_rel, o_len, o_wid, o_vel.reshape(-1, 2), self.corridor,
+                           grow if len(o_pos) else np.zeros(0))
 
     def to_xy_velocity(self, s: float, d: float, v_frenet, lead_s: float = 0.0) -> np.ndarray:
         """(2,) world velocity of a Frenet command (s_dot, d_dot), with the command's magnitude (the

@@ -5,9 +5,9 @@ when a lane change back would hit it. The tracker keeps each return for ``memory
 last seen, coasting it at the velocity estimated from that return (:func:`.perception.velocity_estimate`:
 motion along the ego's heading that explains the radial speed) while it stays outside
 the field of view or beyond the range. A remembered return that should be visible now is dropped (the
-scan is trusted); one out of view that a new return within ``gate_m`` matches is replaced by it, unless it
-stands (:data:`STANDING_MPS`: the new return is then another part of the same object, the part still in
-view). No target ids are used.
+scan is trusted); one out of view that a new return within ``gate_m`` matches is replaced by it, unless it stands
+(:data:`STANDING_MPS`: the new return is another part of the same object, the part still in view); of
+standing ones within :data:`SAME_PART_M` of each other the oldest is kept. No target ids are used.
 With rear and side radars too, one memory serves them all (see :meth:`Tracker.update`).
 Output: a :class:`~.radar.Detections` whose rows are the current returns followed by the coasted
 ones, range and azimuth recomputed from each ego's current sensor pose (azimuths may lie outside
@@ -26,6 +26,8 @@ from sumo_avoid.sensing.perception import velocity_estimate
 _EGO_SEPARATION_M = 1e6  # egos' returns are kept apart in the search tree along a third axis
 #: A remembered return estimated slower than this (m/s) stands: its coasted position is where it was seen.
 STANDING_MPS = 0.5
+#: ... and one remembered this close (m) to an older one is the same part of it seen again (noise ~0.1-0.3 m).
+SAME_PART_M = 0.5
 
 
 def _near_same_ego(p, e, q, f, gate_m: float) -> np.ndarray:
@@ -83,15 +85,16 @@ class Tracker:
                 r, az, pred = self._polar(d, self._e, now)
                 half, rmax = self.views.get(d.mount, (self.half, self.max_range_m))
                 keep &= ~((np.abs(az) <= half) & (r <= rmax))
-            # re-observed (a new return of the same ego within gate_m): replaced -- unless it stands. Out of
-            # view, a standing return is where it was seen; a new return near it is another part of the
-            # same object that is still in view (the beam's edge cuts it): a car standing at an angle
-            # beside the ego's path, its near corner gone out of the front radar's view, returned only
-            # from its far end, which put its box 1.5 m too far away, and the ego touched the corner in
-            # passing (wildau_turns, radar, seeds 1-5)
-            k = np.flatnonzero(keep & (np.hypot(self._v[:, 0], self._v[:, 1]) >= STANDING_MPS))
+            # re-observed (a new return of the same ego within gate_m): replaced -- unless it stands. Out of view,
+            # a standing return is where it was seen; a new return near it is another part of the same object,
+            # the part still in view (the beam's edge cuts it): a car standing askew beside the ego's path, its
+            # near corner out of the front radar's view, was returned only from its far end, which put its box
+            # 1.5 m too far away, and the ego touched the corner in passing (wildau_turns, radar, seeds 1-5)
+            moving = np.hypot(self._v[:, 0], self._v[:, 1]) >= STANDING_MPS
+            k = np.flatnonzero(keep & moving)
             if len(k) and len(e_new):
                 keep[k[_near_same_ego(pred[k], self._e[k], p_new, e_new, self.gate_m)]] = False
+            keep[self._thinned(np.flatnonzero(keep & ~moving), pred)] = False
             k = np.flatnonzero(keep)
             self._e = np.concatenate([e_new, self._e[k]])
             self._p = np.concatenate([p_new, self._p[k]])
@@ -110,6 +113,22 @@ class Tracker:
                          ref.target + ("",) * (len(rows) - ref.n), ref.mount,
                          None if ref.vru is None and not self._s.any() else self._s[rows])
         return out if not isinstance(det, tuple) else (out,) + scans[1:]
+
+    def _thinned(self, k, pred) -> np.ndarray:
+        """Of the standing remembered returns ``k``, those within :data:`SAME_PART_M` of an older one of the same
+        ego: the same part seen again (a cyclist at the beam's edge, in and out of view with the noise, piled
+        up 20 returns otherwise), which the older one stands for from then on (its memory runs from the newer
+        one's sighting); returns a metre apart along a car's side all stay."""
+        drop, kept = [], []
+        for i in k[np.lexsort((k, self._t[k]))]:  # oldest first
+            j = np.asarray(kept, int)
+            same = j[(np.hypot(*(pred[j] - pred[i]).T) < SAME_PART_M) & (self._e[j] == self._e[i])] if len(j) else j
+            if len(same):
+                drop.append(i)
+                self._t[same[0]] = self._t[i]  # seen again: remembered from now on
+            else:
+                kept.append(i)
+        return np.asarray(drop, int)
 
     def _polar(self, det, e, now, rows=slice(None)):
         pred = self._p[rows] + self._v[rows] * (now - self._t[rows])[:, None]

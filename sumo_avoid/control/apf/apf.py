@@ -51,6 +51,8 @@ from sumo_avoid.core.geometry import (
 from sumo_avoid.core.types import EgoTask, Observation
 from sumo_avoid.road.gaps import lane_change_length_m
 
+VRU_STAND_MPS = 0.5  # a person or cyclist slower than this stands (passed at a crawl when only its margin is in the way), m/s
+
 
 @dataclass(frozen=True)
 class ApfParams:
@@ -236,7 +238,15 @@ class ApfDriver:
         squeeze = ~beside & passable
         slow = np.tile(np.hypot(*sc.o_vel.T), C) <= p.squeeze_speed_mps
         crawl = squeeze | (slow & self._turned_towards(h, beside, side, (e_lo, e_hi), (o_lo, o_hi), lat_closing))
-        beside = beside | squeeze
+        # a person or cyclist standing beside the strip, in it only by its margin: passed at a crawl, not waited
+        # for (berlin_eastbound, radar, seed 2: a cyclist queued in the next lane behind a parked car, 0.57 m
+        # from the ego's side, stopped it for good, and the cyclist waited for the ego to pass)
+        g = 0.5 * np.tile(sc.o_grow if sc.o_grow is not None else np.zeros(O), C)
+        standing = np.tile(np.hypot(*sc.o_vel.T), C) < VRU_STAND_MPS
+        vru_beside = ~beside & (g > 0.0) & standing & (lat_closing <= p.squeeze_closing_mps) & (
+            (e_lo - p.gov_margin_m > o_hi - g) | (e_hi + p.gov_margin_m < o_lo + g))
+        crawl = crawl | vru_beside
+        beside = beside | squeeze | vru_beside
         # one squeezed past that the ego must move over for (shift > 0) pushes straight across the road,
         # away from it (its corner just ahead of the ego's front face is nearest along the road, and along
         # the road it pushes no car beside it), from as far as the car needs to move over by the shift at
