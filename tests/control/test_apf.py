@@ -187,3 +187,28 @@ def test_a_car_squeezed_past_pushes_the_ego_across_from_as_far_as_it_needs_to_mo
     free = FrenetScene(438.43, 0.14, 0.022, np.array([4.8, 0.0]), 4.8, 1.8, np.zeros((0, 2)), np.zeros(0), np.zeros(0),
                        np.zeros(0), np.zeros((0, 2)), sc.corridor)
     assert F[0] == pytest.approx(_kerb_driver().field(free, free.q[None], target).F[0, 0])  # and nothing along it
+
+
+@pytest.mark.parametrize("speed_mps, grow_m, crawl", [
+    (0.0, 2.0, True),  # standing, its margin in the strip: passed at the squeeze speed
+    (0.0, 0.0, None),  # no margin: beside the strip, no speed limit from it
+    (1.5, 2.0, False),  # riding: its margin is kept (the ego waits behind it)
+])
+def test_a_cyclist_standing_beside_the_strip_in_it_only_by_its_margin_is_passed_at_a_crawl(speed_mps, grow_m, crawl):
+    # berlin_eastbound, radar, seed 2: a cyclist (a 1.8 x 0.8 m box, grown by the 1 m VRU margin) queued behind a
+    # parked car in the next lane, its centre 1.9 m left of the ego's, 5 m ahead: its own box 0.57 m from the
+    # ego's side (more than the 0.4 m margin), the grown one 0.43 m into the strip
+    from sumo_avoid.control.road_view import FrenetScene
+
+    sc = FrenetScene(547.0, 0.08, 0.0, np.zeros(2), 4.8, 1.8, np.array([[553.1, 1.98]]), np.zeros(1),
+                     np.array([1.8 + grow_m]), np.array([0.8 + grow_m]), np.array([[speed_mps, 0.0]]),
+                     lambda s: (np.full(len(s), -1.6), np.full(len(s), 4.8)), np.array([grow_m]))
+    drv = _kerb_driver()
+    v = drv.field(sc, sc.q[None], np.array([562.0, 0.0])).v_safe
+    if crawl is None:
+        assert v == np.inf
+    elif crawl:
+        # reached at the squeeze speed, braking at gov_decel from its rear 5.7 m ahead of the front:
+        assert v == pytest.approx(np.sqrt(drv.p.squeeze_speed_mps**2 + 2 * drv.p.gov_decel_mps2 * (553.1 - 1.9 - 549.4)))
+    else:
+        assert v < 5.0
