@@ -23,6 +23,9 @@ from sumo_avoid.core.snapshot import Snapshot
 from sumo_avoid.core.types import Motion, Observation
 
 _REVERSE_ANGLE = np.radians(90.0)
+#: A desired velocity slower than this (m/s) asks the car to stop; its direction, if any, is where to face
+#: while it brakes (a car braking in a bend steers with the road instead of going on straight).
+STOP_WISH_MPS = 1e-3
 #: A car this slow (m/s) whose desired velocity lies more than 90 degrees off its heading reverses.
 REVERSE_BELOW_MPS = 0.3
 
@@ -49,8 +52,9 @@ def actuate(pos, heading, speed, v_des, limits: KinematicParams, dt_s: float) ->
     speed = np.asarray(speed, float).reshape(-1)
     v_des = np.asarray(v_des, float).reshape(-1, 2)
     s_des = np.hypot(v_des[:, 0], v_des[:, 1])
-    moving_wish = s_des > 1e-6
-    theta_des = np.where(moving_wish, np.arctan2(v_des[:, 1], v_des[:, 0]), heading)
+    facing = s_des > 1e-9
+    moving_wish = s_des >= STOP_WISH_MPS
+    theta_des = np.where(facing, np.arctan2(v_des[:, 1], v_des[:, 0]), heading)
     err = wrap_angle(theta_des - heading)
 
     reverse = (limits.max_reverse_speed_mps > 0) & moving_wish & (np.abs(err) > _REVERSE_ANGLE) & (speed <= REVERSE_BELOW_MPS)
@@ -58,7 +62,7 @@ def actuate(pos, heading, speed, v_des, limits: KinematicParams, dt_s: float) ->
     target = np.where(
         reverse,
         -np.minimum(s_des * np.abs(np.cos(err)), limits.max_reverse_speed_mps),
-        s_des * np.maximum(np.cos(err), 0.0),
+        np.where(moving_wish, s_des * np.maximum(np.cos(err), 0.0), 0.0),
     )
     # growing |speed| (either gear) is limited by max_accel, shrinking it by max_decel
     speeding_up = (np.abs(target) > np.abs(speed)) & (target * speed >= 0)

@@ -40,7 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sumo_avoid.actuation.kinematic import REVERSE_BELOW_MPS
+from sumo_avoid.actuation.kinematic import REVERSE_BELOW_MPS, STOP_WISH_MPS
 from sumo_avoid.control.base_controller import BaseController
 from sumo_avoid.control.road_view import FrenetScene, RoadView
 from sumo_avoid.core.config import field_doc
@@ -342,6 +342,10 @@ class ApfDriver:
         # a car going forward steers at most max_course off the road's direction and moves across
         # it at most at max_lat_speed: a wall a corner touches must not turn it sideways
         course = np.clip(course, -self.max_course, self.max_course)
+        if speed < STOP_WISH_MPS:  # stopping: brake facing the course (in a bend, steering with the road; a
+            # car braking with its wheels straight went on straight, 1.4 m towards an oncoming bus inside a
+            # junction: bologna_bus_lane, radar, seed 2)
+            return 0.1 * STOP_WISH_MPS * np.array([np.cos(course), np.sin(course)])
         v = speed * np.array([np.cos(course), np.sin(course)])
         v[1] = np.clip(v[1], -self.p.max_lat_speed_mps, self.p.max_lat_speed_mps)
         return v
