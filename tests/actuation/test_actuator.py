@@ -65,3 +65,20 @@ def test_each_actuator_declares_the_steering_limits_controllers_plan_with():
 
     assert ACTUATORS["kinematic"].factory.steering(LIM) == (5.0, 0.5)
     assert ACTUATORS["relaxation"].factory.steering(RelaxationParams()) == (0.0, math.inf)
+
+
+def test_a_stop_wish_with_a_direction_brakes_and_steers_that_way():
+    # moving at 5 m/s, heading 0; the wish: stop (1e-4 m/s, below STOP_WISH_MPS), facing 0.2 rad left.
+    # Full braking: 5 - 8 * 0.1 = 4.2 m/s; the heading turns by the yaw limit at the mean speed 4.6 m/s:
+    # min(0.8, 4 / 4.6, 4.6 / 4.25) * 0.1 = 0.08 rad (a zero wish keeps the heading: the car goes on straight)
+    from sumo_avoid.actuation.kinematic import STOP_WISH_MPS
+
+    wish = 0.1 * STOP_WISH_MPS * np.array([[math.cos(0.2), math.sin(0.2)]])
+    m = actuate([[0.0, 0.0]], [0.0], [5.0], wish, KinematicParams(), 0.1)
+    assert m.speed[0] == pytest.approx(4.2)
+    assert m.heading[0] == pytest.approx(0.08)
+    assert actuate([[0.0, 0.0]], [0.0], [5.0], [[0.0, 0.0]], KinematicParams(), 0.1).heading[0] == 0.0
+    # standing, it neither moves nor turns (nor reverses for a wish behind it)
+    for ang in (0.2, 3.0):
+        m = actuate([[0.0, 0.0]], [0.0], [0.0], 1e-4 * np.array([[math.cos(ang), math.sin(ang)]]), KinematicParams(), 0.1)
+        assert (m.speed[0], m.heading[0], *m.pos[0]) == (0.0, 0.0, 0.0, 0.0)
