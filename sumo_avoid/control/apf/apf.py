@@ -243,8 +243,11 @@ class ApfDriver:
         # from the ego's side, stopped it for good, and the cyclist waited for the ego to pass)
         g = 0.5 * np.tile(sc.o_grow if sc.o_grow is not None else np.zeros(O), C)
         standing = np.tile(np.hypot(*sc.o_vel.T), C) < VRU_STAND_MPS
+        # (the ego taken as aligned with the road, as for a squeeze: turned away from it, its rear corner swings
+        # towards it, and it stood for good with its front in the margin, berlin_eastbound, truth, seed 2)
+        a_lo, a_hi = np.repeat(q_cand[:, 1], O) - 0.5 * sc.width, np.repeat(q_cand[:, 1], O) + 0.5 * sc.width
         vru_beside = ~beside & (g > 0.0) & standing & (lat_closing <= p.squeeze_closing_mps) & (
-            (e_lo - p.gov_margin_m > o_hi - g) | (e_hi + p.gov_margin_m < o_lo + g))
+            (a_lo - p.gov_margin_m > o_hi - g) | (a_hi + p.gov_margin_m < o_lo + g))
         crawl = crawl | vru_beside
         beside = beside | squeeze | vru_beside
         # one squeezed past that the ego must move over for (shift > 0) pushes straight across the road,
