@@ -30,6 +30,7 @@ import numpy as np
 from sumo_avoid.road.crossings import people_may_cross, persons_at
 from sumo_avoid.road.polyline import polyline_project_many
 from sumo_avoid.road.regulation import RED
+from sumo_avoid.road.yielding import link_state
 
 RED_OR_YELLOW = RED | frozenset("yY")  # a light beyond a crossing that will hold the ego (road.regulation)
 QUEUE_MPS = 1.0  # a vehicle slower than this beyond a crossing is standing in a queue, m/s
@@ -74,12 +75,8 @@ def light_beyond(crossing, links, signals, need_m: float) -> bool:
     """Does a signal that is not green (red, red-yellow or yellow) hold the ego at a stop line within
     ``need_m`` beyond the crossing? It would stand with its rear on the crossing (wildau_turns, radar,
     seed 1: a 4 m edge between a junction's crossing and the next junction's light)."""
-    for link in links:
-        if link.tls and crossing.s_exit_m - 0.5 < link.s_stop_m <= crossing.s_exit_m + need_m:
-            state = signals.get(link.tls, "")
-            if 0 <= link.link_index < len(state) and state[link.link_index] in RED_OR_YELLOW:
-                return True
-    return False
+    return any(link.tls and crossing.s_exit_m - 0.5 < link.s_stop_m <= crossing.s_exit_m + need_m
+               and link_state(signals, link.tls, link.link_index, link.state) in RED_OR_YELLOW for link in links)
 
 
 def _cum(path: np.ndarray) -> np.ndarray:

@@ -120,6 +120,14 @@ class Tracker:
         up 20 returns otherwise), which the older one stands for from then on (its memory runs from the newer
         one's sighting); returns a metre apart along a car's side all stay."""
         drop, kept = [], []
+        if len(k) < 2:
+            return np.zeros(0, int)
+        # only returns with another of the same ego within SAME_PART_M can be dropped or refreshed (usually none)
+        pairs = cKDTree(np.column_stack([pred[k], self._e[k] * _EGO_SEPARATION_M])).query_pairs(
+            SAME_PART_M, output_type="ndarray")
+        if not len(pairs):
+            return np.zeros(0, int)
+        k = k[np.unique(pairs)]
         for i in k[np.lexsort((k, self._t[k]))]:  # oldest first
             j = np.asarray(kept, int)
             same = j[(np.hypot(*(pred[j] - pred[i]).T) < SAME_PART_M) & (self._e[j] == self._e[i])] if len(j) else j

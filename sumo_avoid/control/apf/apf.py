@@ -236,13 +236,14 @@ class ApfDriver:
         beside = (e_lo - p.gov_margin_m > o_hi) | (e_hi + p.gov_margin_m < o_lo)
         passable, shift = self._squeeze(sc, q_cand, oc, (o_lo, o_hi), side, lat_closing)
         squeeze = ~beside & passable
-        slow = np.tile(np.hypot(*sc.o_vel.T), C) <= p.squeeze_speed_mps
+        o_speed = np.tile(np.hypot(*sc.o_vel.T), C)
+        slow = o_speed <= p.squeeze_speed_mps
         crawl = squeeze | (slow & self._turned_towards(h, beside, side, (e_lo, e_hi), (o_lo, o_hi), lat_closing))
         # a person or cyclist standing beside the strip, in it only by its margin: passed at a crawl, not waited
         # for (berlin_eastbound, radar, seed 2: a cyclist queued in the next lane behind a parked car, 0.57 m
         # from the ego's side, stopped it for good, and the cyclist waited for the ego to pass)
         g = 0.5 * np.tile(sc.o_grow if sc.o_grow is not None else np.zeros(O), C)
-        standing = np.tile(np.hypot(*sc.o_vel.T), C) < VRU_STAND_MPS
+        standing = o_speed < VRU_STAND_MPS
         # (the ego taken as aligned with the road, as for a squeeze: turned away from it, its rear corner swings
         # towards it, and it stood for good with its front in the margin, berlin_eastbound, truth, seed 2)
         a_lo, a_hi = np.repeat(q_cand[:, 1], O) - 0.5 * sc.width, np.repeat(q_cand[:, 1], O) + 0.5 * sc.width
