@@ -71,6 +71,7 @@ class FrenetScene:
     o_vel: np.ndarray  # (O, 2) (s_dot, d_dot), m/s
     corridor: Callable  # s (N,) -> (d_lo (N,), d_hi (N,)): bounds of the ego's lanes, m
     o_grow: np.ndarray | None = None  # (O,) how much each one's length and width grew by its VRU margin, m (None: 0)
+    one_sided_m: float = 0.0  # of the corridor's width at s, the junction widening that lies on one side only, m
 
     @property
     def q(self) -> np.ndarray:
@@ -135,6 +136,14 @@ class RoadView:
         # wide entry, and the car comes out against the oncoming lane at the exit
         wide = np.abs(off) > 1e-9
         return np.where(wide, np.minimum(lo, -self._room), lo), np.where(wide, np.maximum(hi, self._room), hi)
+
+    def one_sided_widening(self, s: float) -> float:
+        """How much of the corridor's width at s is junction widening on one side only, m: a kerb stops
+        it on the other, where the car on its lane keeps only its lane's room."""
+        if self.lanes is None:
+            return 0.0
+        m_lo, m_hi = self.lanes.widening([s])
+        return float(abs(m_lo[0] - m_hi[0]))
 
     def lane_bounds(self, s) -> tuple[np.ndarray, np.ndarray]:
         """The bounds of the ego's lanes at arc lengths s (lane frame), with the oncoming lane while a
@@ -267,7 +276,7 @@ class RoadView:
         return FrenetScene(s, d, float(h_rel[0]), vel[0],
                            float(snap.length[row]), float(snap.width[row]),
                            o_pos.reshape(-1, 2), o_rel, o_len, o_wid, o_vel.reshape(-1, 2), self.corridor,
-                           grow if len(o_pos) else np.zeros(0))
+                           grow if len(o_pos) else np.zeros(0), self.one_sided_widening(s))
 
     def to_xy_velocity(self, s: float, d: float, v_frenet, lead_s: float = 0.0) -> np.ndarray:
         """(2,) world velocity of a Frenet command (s_dot, d_dot), with the command's magnitude (the

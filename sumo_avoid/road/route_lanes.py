@@ -79,12 +79,18 @@ class RouteLanes:
     def corridor(self, s) -> tuple[np.ndarray, np.ndarray]:
         """(d_lo (N,), d_hi (N,)): the right and left bounds of the ego's lanes at arc lengths s, m."""
         s = np.atleast_1d(np.asarray(s, float))
-        m = np.interp(s, self._widen_s, self._widen_m, left=0.0, right=0.0) if len(self._widen_s) else np.zeros(len(s))
-        m_lo = m_hi = m
-        if self._kerb is not None:  # never widened over the kerb of a walkway (LanePiece.kerb_room_m)
-            k = np.clip(np.searchsorted(self._starts, s, side="right") - 1, 0, len(self.pieces) - 1)
-            m_lo, m_hi = np.minimum(m, self._kerb[k, 0]), np.minimum(m, self._kerb[k, 1])
+        m_lo, m_hi = self.widening(s)
         return np.interp(s, self._s, self._lo) - m_lo, np.interp(s, self._s, self._hi) + m_hi
+
+    def widening(self, s) -> tuple[np.ndarray, np.ndarray]:
+        """(right (N,), left (N,)): how far the corridor at arc lengths s is widened beyond the lanes on
+        each side inside a junction, m (``JUNCTION_MARGIN_M``, never over the kerb of a walkway)."""
+        s = np.atleast_1d(np.asarray(s, float))
+        m = np.interp(s, self._widen_s, self._widen_m, left=0.0, right=0.0) if len(self._widen_s) else np.zeros(len(s))
+        if self._kerb is None:
+            return m, m
+        k = np.clip(np.searchsorted(self._starts, s, side="right") - 1, 0, len(self.pieces) - 1)
+        return np.minimum(m, self._kerb[k, 0]), np.minimum(m, self._kerb[k, 1])
 
 
     def lanes_end_s(self, s: float) -> float:

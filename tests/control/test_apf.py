@@ -212,3 +212,24 @@ def test_a_cyclist_standing_beside_the_strip_in_it_only_by_its_margin_is_passed_
         assert v == pytest.approx(np.sqrt(drv.p.squeeze_speed_mps**2 + 2 * drv.p.gov_decel_mps2 * (553.1 - 1.9 - 549.4)))
     else:
         assert v < 5.0
+
+
+def test_junction_widening_on_one_side_only_does_not_push_a_car_centred_on_its_lane():
+    # bologna_bus_lane, truth, seed 2 (372.8 s, as recorded): inside junction 62 the ego's internal lane is widened
+    # by 0.75 m on its left only (a walking area's kerb on its right). The ego, 0.1 m right of its lane's centre,
+    # 0.6 m from the kerb-side bound, felt that bound once the wider corridor raised the room its cap allows, and
+    # was pushed left (course 0.2 rad off the road) towards an oncoming bus in the junction. The room is its lane's.
+    from sumo_avoid.control.road_view import FrenetScene
+
+    def scene(lo, hi, one_sided):
+        return FrenetScene(418.24, -0.10, 0.008, np.array([7.4, 0.0]), 4.8, 1.8, np.zeros((0, 2)), np.zeros(0),
+                           np.zeros(0), np.zeros(0), np.zeros((0, 2)),
+                           lambda s: (np.full(len(s), lo), np.full(len(s), hi)), None, one_sided)
+
+    drv, target = _kerb_driver(), np.array([433.24, 0.0])
+    lane = drv.field(scene(-1.6, 1.6, 0.0), np.array([[418.24, -0.10]]), target).F[0]
+    kerb = drv.field(scene(-1.6, 2.35, 0.75), np.array([[418.24, -0.10]]), target).F[0]
+    assert kerb[1] == pytest.approx(lane[1])  # the attraction alone: 10 x 0.1 / 15
+    assert lane[1] == pytest.approx(10.0 * 0.10 / np.hypot(15.0, 0.10))
+    # counted as widening on both sides (the old room), the kerb-side bound 0.6 m away pushes it across
+    assert drv.field(scene(-1.6, 2.35, 0.0), np.array([[418.24, -0.10]]), target).F[0][1] > lane[1] + 1.0

@@ -214,7 +214,10 @@ class ApfDriver:
         lo, hi = sc.corridor(strip[..., 0].ravel())
         cd = strip[..., 1].ravel()
         lo_here, hi_here = sc.corridor(np.array([sc.s]))
-        room = max(0.5 * (float(hi_here[0] - lo_here[0]) - W), 0.1)  # beside a centred car, m
+        # beside a car centred on its lane, m; junction widening only as far as it lies on both sides (where a kerb
+        # stops it on one, the car on its lane felt that kerb and was pushed towards the oncoming lane inside the
+        # junction, into a bus there: bologna_bus_lane, seed 2)
+        room = max(0.5 * (float(hi_here[0] - lo_here[0]) - sc.one_sided_m - W), 0.1)
         for rho, inward in (((cd - lo).reshape(C, 4).min(axis=1), 1.0), ((hi - cd).reshape(C, 4).min(axis=1), -1.0)):
             closing = max(-inward * float(v_ego[1]), 0.0)  # a car drifting towards the bound feels it earlier
             rho0 = p.rho0_edge_m + closing**2 / (2.0 * p.edge_lat_decel_mps2) + p.edge_reaction_s * closing
