@@ -25,6 +25,9 @@ def _scene(cars, ego_d=0.0):
     ([(80.0, 0.0, 0.0), (88.5, 0.0, 0.0), (97.0, 0.0, 0.0)], True),
     ([(80.0, 0.0, 0.0), (97.0, 0.0, 0.0)], False),  # 12.5 m bumper to bumper: more than the chain's 8 m
     ([(80.0, 0.0, 0.0), (88.5, 0.0, 3.0), (97.0, 0.0, 0.0)], False),  # the middle one moves: the chain ends
+    # moving off from the line at 1.1 and 2.3 m/s (below CREEP_MPS): still a queue (lyon_unseen, seed 1)
+    ([(80.0, 0.0, 0.0), (88.5, 0.0, 1.1), (97.0, 0.0, 2.3)], True),
+    ([(80.0, 0.0, 1.1), (88.5, 0.0, 0.0), (97.0, 0.0, 0.0)], False),  # the one just ahead still moves: no queue yet
     ([(97.0, 0.0, 2.0)], False),  # the one ahead moves
     ([(97.0, 3.2, 0.0)], False),  # in the next lane
     ([(50.0, 0.0, 0.0)], False),  # behind the ego
