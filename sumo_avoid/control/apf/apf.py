@@ -237,7 +237,10 @@ class ApfDriver:
         side = np.sign(np.tile(sc.o_pos[:, 1], C) - np.repeat(q_cand[:, 1], O))
         lat_closing = np.maximum(v_rel[:, 1] * side, 0.0)
         beside = (e_lo - p.gov_margin_m > o_hi) | (e_hi + p.gov_margin_m < o_lo)
-        passable, shift = self._squeeze(sc, q_cand, oc, (o_lo, o_hi), side, lat_closing)
+        # the ego's d span taken as aligned with the road (for a squeeze and a VRU beside: turned away from the
+        # vehicle, its rear corner swings towards it)
+        a_lo, a_hi = np.repeat(q_cand[:, 1], O) - 0.5 * sc.width, np.repeat(q_cand[:, 1], O) + 0.5 * sc.width
+        passable, shift = self._squeeze(sc, q_cand, oc, (a_lo, a_hi), (o_lo, o_hi), side, lat_closing)
         squeeze = ~beside & passable
         o_speed = np.tile(np.hypot(*sc.o_vel.T), C)
         slow = o_speed <= p.squeeze_speed_mps
@@ -247,9 +250,8 @@ class ApfDriver:
         # from the ego's side, stopped it for good, and the cyclist waited for the ego to pass)
         g = 0.5 * np.tile(sc.o_grow if sc.o_grow is not None else np.zeros(O), C)
         standing = o_speed < VRU_STAND_MPS
-        # (the ego taken as aligned with the road, as for a squeeze: turned away from it, its rear corner swings
-        # towards it, and it stood for good with its front in the margin, berlin_eastbound, truth, seed 2)
-        a_lo, a_hi = np.repeat(q_cand[:, 1], O) - 0.5 * sc.width, np.repeat(q_cand[:, 1], O) + 0.5 * sc.width
+        # (the ego taken as aligned with the road, as for a squeeze: turned, it stood for good with its front in
+        # the margin, berlin_eastbound, truth, seed 2)
         vru_beside = ~beside & (g > 0.0) & standing & (lat_closing <= p.squeeze_closing_mps) & (
             (a_lo - p.gov_margin_m > o_hi - g) | (a_hi + p.gov_margin_m < o_lo + g))
         crawl = crawl | vru_beside
@@ -267,7 +269,7 @@ class ApfDriver:
         move[over] = [lane_change_length_m(x, self.steering[0]) for x in shift[over]]
         return beside, crawl, away, move, lat_closing
 
-    def _squeeze(self, sc: FrenetScene, q_cand, oc, o_span, side, lat_closing):
+    def _squeeze(self, sc: FrenetScene, q_cand, oc, e_span, o_span, side, lat_closing):
         """((C*O,) bool, (C*O,) shift, m): the vehicle stands (or crawls) and does not close across the road, and the
         ego, taken as aligned with the road (like for the bounds: a heading turned away from the
         vehicle must not make its rear corner count), clears it with ``squeeze_clear_m`` by a small
@@ -277,8 +279,8 @@ class ApfDriver:
         oncoming lane's stop line with its nose turned in, just ahead of the ego's corner and to its
         side, would otherwise stop the ego for good inside a junction while it waits for the ego."""
         p, C, O, L = self.p, len(q_cand), len(sc.o_pos), sc.length
-        qs, qd = np.repeat(q_cand[:, 0], O), np.repeat(q_cand[:, 1], O)
-        e_lo, e_hi = qd - 0.5 * sc.width, qd + 0.5 * sc.width
+        qs = np.repeat(q_cand[:, 0], O)
+        e_lo, e_hi = e_span  # the ego's d span aligned with the road, (C*O,) each
         o_lo, o_hi = o_span  # the vehicles' d spans, (C*O,) each, as field() has them
         shift = np.where(side > 0, e_hi - o_lo, o_hi - e_lo) + p.squeeze_clear_m
         lo, hi = sc.corridor(q_cand[:, 0])
