@@ -68,6 +68,31 @@ class RightOfWay:
         return tuple(self._foe(other, self.via_chain(other), mine) for other in node.getConnections()
                      if other is not conn and not other.getFromLane().getID().startswith(":") and node.forbids(other, conn))
 
+    def inside(self, conn) -> tuple[FoeLink, ...]:
+        """The links *without* priority over ``conn`` (from another edge) whose internal lanes cross its
+        own or end in its lane, each with only those internal lanes as its approach: a vehicle there is
+        already in the junction. A car with priority still lets it clear the junction (SUMO's drivers
+        treat it as a link leader; traffic law: who is in the junction clears it first), and SUMO's
+        vehicles enter on such links whenever they see no SUMO-driven foe coming, which an ego moved by
+        the plug-in standing at its line is not (Villeurbanne, unseen district: a cyclist waiting inside
+        the junction to turn left set off as the ego's light turned green, and the two met at the exit)."""
+        node = conn.getFrom().getToNode()
+        if node.getType() == UNREGULATED or not _has_logic(node):
+            return ()  # unregulated: every crossing link is a foe already (foes)
+        mine = self.via_chain(conn)
+        line, target = _chain_line(mine), conn.getToLane().getID()
+        out = []
+        for other in node.getConnections():
+            if (other.getFrom() is conn.getFrom() or other.getFromLane().getID().startswith(":")
+                    or node.forbids(other, conn)):
+                continue
+            chain = self.via_chain(other)
+            if chain and (other.getToLane().getID() == target or _crosses(_chain_line(chain), line)):
+                foe = self._foe(other, chain, mine, upstream=False)
+                if foe.approach:
+                    out.append(foe)
+        return tuple(out)
+
     def wait_s(self, conn, path, cum, s_stop_m: float, clear_m: float, half_width_m: float) -> float:
         """Where on the ego's ``path`` (arc lengths ``cum``) a car on ``conn`` waits inside the junction
         for the links with priority that cross it: the farthest arc length from the stop line on whose
@@ -124,8 +149,9 @@ class RightOfWay:
             return False
         return any(node.forbids(conn, other) for other in lane.getOutgoing())
 
-    def _foe(self, other, chain, mine) -> FoeLink:
-        """``other`` (its internal lanes ``chain``) as a foe of the link whose internal lanes are ``mine``."""
+    def _foe(self, other, chain, mine, upstream: bool = True) -> FoeLink:
+        """``other`` (its internal lanes ``chain``) as a foe of the link whose internal lanes are ``mine``;
+        its approach without the lanes before its stop line unless ``upstream``."""
         approach: dict[str, float] = {}
         conflict = _conflict_offset(chain, mine)
         acc = 0.0
@@ -134,7 +160,8 @@ class RightOfWay:
                 break
             approach[ln.getID()] = conflict - acc
             acc += ln.getLength()
-        self._upstream(other.getFromLane(), conflict + other.getFromLane().getLength(), approach)
+        if upstream:
+            self._upstream(other.getFromLane(), conflict + other.getFromLane().getLength(), approach)
         tls = other.getTLSID() or ""
         return FoeLink(tls, int(other.getTLLinkIndex()) if tls else -1, other.getState() or "",
                        other.getDirection() or "", tuple(sorted(approach.items())), float(conflict))

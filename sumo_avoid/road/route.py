@@ -56,6 +56,9 @@ class RouteLink:
     # arc length of SUMO's internal junction on the link (where its internal lane is split: a left turn
     # waits there for the oncoming traffic), m; nan when the link has none
     s_wait_m: float = float("nan")
+    # links without priority over this one that cross or merge with it, their internal lanes only: a vehicle
+    # moving there is in the junction and clears it first (sumo.right_of_way.RightOfWay.inside)
+    inside: tuple[FoeLink, ...] = ()
 
     @property
     def yield_line_m(self) -> float:

@@ -255,7 +255,8 @@ class RoutePlanner:
                          self.right_of_way.foes(conn), self._oncoming(conn.getTo(), conn),
                          tuple(o.lane for o in self._oncoming(conn.getFrom())),
                          crossing_links(self._net, conn, path, cum, s_stop_m - CROSSING_REACH_M,
-                                        s_stop_m + through + CROSSING_REACH_M), float(wait))
+                                        s_stop_m + through + CROSSING_REACH_M), float(wait),
+                         self.right_of_way.inside(conn))
 
     def _oncoming(self, edge, conn=None) -> tuple[OncomingLane, ...]:
         """The lane bordering ``edge`` on every edge that runs the other way between the same two

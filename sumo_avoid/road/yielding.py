@@ -188,6 +188,23 @@ def foe_arrivals(foes: tuple[FoeLink, ...], signals, lanes: dict[str, list[int]]
     return out
 
 
+def clearing_arrivals(inside: tuple[FoeLink, ...], lanes: dict[str, list[int]], lane_pos, speed, length,
+                      exclude: set[int]) -> list[float]:
+    """Arrival times at their conflict points of the vehicles moving (at least STAND_MPS) on the internal
+    lanes of links without priority (:attr:`~sumo_avoid.road.route.RouteLink.inside`) that have not
+    passed them by their length: they are in the junction and clear it first, whatever their light now
+    shows; one slower than START_MPS sets off (accelerating as from a standing start). One standing there
+    waits (at its internal stop, for the ego): it is no arrival."""
+    out = []
+    for foe in inside:
+        for lane, offset in foe.approach:
+            for r in lanes.get(lane, ()):
+                x, v = offset - float(lane_pos[r]), float(speed[r])
+                if r not in exclude and x > -float(length[r]) and v >= STAND_MPS:
+                    out.append(arrival_time(x, v, v < START_MPS))
+    return out
+
+
 def stands_for_good(to_line_m: float, v_mps: float, now_s: float, wait_s: float, since, row, tls: str) -> bool:
     """Whether a foe (its front ``to_line_m`` before its stop line, at ``v_mps``) stands for good: still
     (slower than STAND_MPS), not inside the junction (at most STANDING_PAST_LINE_M past its line), and

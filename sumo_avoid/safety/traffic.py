@@ -20,6 +20,13 @@ Per ego and step, with s the arc length of the ego's front bumper projected on i
   that could stop before the line only braking harder than ``commit_decel_mps2`` goes on, and
   past the line it never stops for a foe (it clears the junction). A zipper merge is taken in
   turn (yielding.zipper_slot).
+* **Clearing the junction.** On any link, also one with priority or green, the ego is held at its
+  stop line the same way while a vehicle *moving* on the internal lanes of a link without priority
+  that crosses or merges with its own (:attr:`~sumo_avoid.road.route.RouteLink.inside`) would reach
+  the conflict point within that gap: it is in the junction and clears it first (SUMO's drivers
+  treat it as a link leader). SUMO's vehicles enter when they see no SUMO-driven foe coming, and an
+  ego standing at its line is none; one standing inside (waiting at its internal stop for the ego)
+  does not hold it.
 * **Wide exits.** Where a turn is too tight for the car and its drivable line swings into the
   oncoming lane of the exit edge, the ego is held at its stop line until that lane is clear for
   the time it takes to make the turn (:mod:`sumo_avoid.safety.wide_turns`), on any link.
@@ -62,6 +69,7 @@ from sumo_avoid.safety.wide_turns import oncoming_first, wide_exits
 from sumo_avoid.road.yielding import (
     STAND_MPS,
     can_give_way,
+    clearing_arrivals,
     critical_gap_s,
     ego_time_to_line,
     foe_arrivals,
@@ -136,7 +144,7 @@ class TrafficRulesLayer:
 
     def add_ego(self, task: EgoTask) -> None:
         wide = wide_exits(task, self._turn_radius_m)
-        watch = (any(lk.tls or lk.foes or lk.state in STOP_SIGNS or lk.crossings for lk in task.links) or bool(wide)
+        watch = (any(lk.tls or lk.foes or lk.inside or lk.state in STOP_SIGNS or lk.crossings for lk in task.links) or bool(wide)
                  or self.p.speed_factor is not None)
         self._egos[task.vid] = _Ego(task, watch, wide=wide)
         self._allway |= any(lk.state == "w" and lk.foes for lk in task.links)
@@ -217,6 +225,11 @@ class TrafficRulesLayer:
             if (wide is not None and not late and d > 0 and
                     oncoming_first(wide, e.s_m, lanes, snap.lane_pos, snap.speed) < p.gap_margin_s):
                 return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
+            if link.inside and d > 0 and not late:  # who is in the junction clears it first, on any link
+                clearing = clearing_arrivals(link.inside, lanes, snap.lane_pos, snap.speed, snap.length, {row})
+                if min(clearing, default=math.inf) < (ego_time_to_line(d, v, p.stop_margin_m) + critical_gap_s(link, p)
+                                                       + p.gap_margin_s):
+                    return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
             if not link.foes:
                 continue
             if link.yield_line_m > link.s_stop_m:  # a signalised turn waits at its internal junction

@@ -50,3 +50,37 @@ def test_the_ego_waits_in_a_queue_only_for_its_patience():
     sc_end = _scene([(167.0, 0.0, 0.0)])
     assert waits_in_queue(sc_end, Task(), 170.0, 0.0, 15.0, 30.0)
     assert not waits_in_queue(sc_end, Task(), 500.0, 0.0, 15.0, 30.0)
+
+
+def test_the_chain_ahead_ends_where_the_gap_opens():
+    """The ego's front at 62.4 m. Cars (4.5 m) at 68 (rear 65.75: 3.35 m ahead), 76 (rear 73.75: 3.5 m behind
+    the first's front 70.25), 90 (rear 87.75: 9.5 m behind 78.25, more than CHAIN_GAP_M): the chain ends at
+    78.25, moving or not; a car in the next lane is no link."""
+    from sumo_avoid.control.apf.queue import chain_end_s
+
+    assert chain_end_s(_scene([(68.0, 0.0, 3.0), (76.0, 0.0, 0.0), (90.0, 0.0, 0.0), (72.0, 3.2, 0.0)])) == 78.25
+    assert chain_end_s(_scene([(75.0, 0.0, 0.0)])) == 62.4  # its rear 72.75: 10.35 m ahead
+    assert chain_end_s(_scene([])) == 62.4
+
+
+class _View:
+    """A two-lane corridor [-1.6, 4.8] that narrows to the ego's lane [-1.6, 1.6] from s = ``ends``."""
+
+    def __init__(self, ends):
+        self.ends, self.length_m = ends, 500.0
+
+    def corridor(self, s):
+        s = np.asarray(s, float)
+        return np.full(len(s), -1.6), np.where(s < self.ends, 4.8, 1.6)
+
+
+@pytest.mark.parametrize("ends, runs_past", [(200.0, True), (93.0, True), (92.0, False), (70.0, False)])
+def test_an_escape_lane_must_run_past_the_traffic_it_passes(ends, runs_past):
+    """Chain end 78.25 (above) + the ego's 4.8 m + CHAIN_GAP_M 8 m = 91.05: the next lane (centre 3.2 m, a
+    1.8 m car needs hi >= 4.1) must be there at every metre from the ego's 60 m to 92 m (the first sample
+    past 91.05): a lane that narrows from 93 m does, one from 92 m does not."""
+    from sumo_avoid.control.apf.queue import lane_runs_past
+
+    sc = _scene([(68.0, 0.0, 3.0), (76.0, 0.0, 0.0), (90.0, 0.0, 0.0)])
+    assert lane_runs_past(_View(ends), sc, 3.2) == runs_past
+    assert lane_runs_past(_View(ends), sc, 0.0)  # the ego's own lane always runs on

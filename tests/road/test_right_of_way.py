@@ -68,3 +68,25 @@ def test_nobody_gives_way_at_an_unregulated_junction(crossroads):
     net = sumolib.net.readNet(str(crossroads / "x.net.xml"), withInternal=True)
     conn = net.getEdge("SC").getConnections(net.getEdge("CN"))[0]
     assert not any(RightOfWay(net).gives_way_to(lane, conn) for e in ("EC", "NC", "WC") for lane in net.getEdge(e).getLanes())
+
+
+def test_who_is_in_the_junction_clears_it_first():
+    """nets/left_turn: for the major straight from the north (N2C_0 -> C2S), the minor left turn from the
+    south (S2C_1 -> C2W), which crosses it, is a link *inside*: only its internal lanes, none before its
+    stop line (a car there waits for the straight; one in the junction clears it). The straight, with
+    priority over the left turn, is that one's foe, not its link inside."""
+    from conftest import ROOT
+
+    net = sumolib.net.readNet(str(ROOT / "nets" / "left_turn.net.xml"), withInternal=True)
+    row = RightOfWay(net)
+    left = next(c for c in net.getLane("S2C_1").getOutgoing() if c.getTo().getID() == "C2W")
+    straight = next(c for c in net.getLane("N2C_0").getOutgoing() if c.getTo().getID() == "C2S")
+    inside = row.inside(straight)
+    via = {v.getID() for v in row.via_chain(left)}
+    mine = [f for f in inside if {lane for lane, _ in f.approach} <= via]
+    assert len(mine) == 1 and mine[0].direction == "l"
+    assert all(lane.startswith(":") for f in inside for lane, _ in f.approach)
+    assert all(0.0 <= off <= sum(v.getLength() for v in row.via_chain(left)) for _, off in mine[0].approach)
+    assert not any({lane for lane, _ in f.approach} & {v.getID() for v in row.via_chain(straight)}
+                   for f in row.inside(left))  # the straight is the left turn's foe, not inside
+    assert any(lane == "N2C_0" for f in row.foes(left) for lane, _ in f.approach)

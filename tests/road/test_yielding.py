@@ -232,3 +232,19 @@ def test_a_signalised_turn_gives_way_at_its_internal_junction():
     assert RouteLink(100.0, "J", tls="T", link_index=1, state="o", s_wait_m=109.0).yield_line_m == 109.0
     assert RouteLink(100.0, "J", state="m", s_wait_m=109.0).yield_line_m == 100.0  # unsignalised: the stop line
     assert RouteLink(100.0, "J", tls="T", link_index=1, state="o").yield_line_m == 100.0  # none (nan)
+
+
+def test_a_vehicle_moving_in_the_junction_arrives_one_standing_there_does_not():
+    """clearing_arrivals by hand: a link inside with its internal lane ":J_3_0" (conflict 8 m from its
+    start). Row 0 moves at 4 m/s 2 m in: setting off (slower than START_MPS), (sqrt(16 + 2 * 2.6 * 6) - 4)
+    / 2.6 = 1.0475 s; row 1 stands at its internal stop (waits for the ego); row 2 at 10 m/s is 1 m past
+    the conflict, less than its 4.5 m: 0 s; row 3 is 5 m past it: gone."""
+    from sumo_avoid.road.yielding import clearing_arrivals
+
+    inside = (FoeLink(state="m", approach=((":J_3_0", 8.0),), line_m=8.0),)
+    lanes = rows_by_lane([":J_3_0"] * 4)
+    got = clearing_arrivals(inside, lanes, np.array([2.0, 3.0, 9.0, 13.0]), np.array([4.0, 0.0, 10.0, 10.0]),
+                            np.full(4, 4.5), set())
+    assert got == pytest.approx([(math.sqrt(16.0 + 2.0 * 2.6 * 6.0) - 4.0) / 2.6, 0.0])
+    assert clearing_arrivals(inside, lanes, np.array([2.0, 3.0, 9.0, 13.0]), np.array([4.0, 0.0, 10.0, 10.0]),
+                             np.full(4, 4.5), {0}) == [0.0]

@@ -28,7 +28,7 @@ import numpy as np
 
 from sumo_avoid.control.apf.apf import ApfDriver, ApfParams
 from sumo_avoid.control.apf.oncoming_pass import ABORT_D_M, PASS_CARROT_MIN_M, RADAR_SIGHT_M, OncomingPass, PassParams
-from sumo_avoid.control.apf.queue import STAND_MPS, waits_in_queue
+from sumo_avoid.control.apf.queue import STAND_MPS, lane_runs_past, waits_in_queue
 from sumo_avoid.control.base_controller import BaseController
 from sumo_avoid.control.road_view import FrenetScene, RoadView
 from sumo_avoid.core.config import FieldError, field_doc
@@ -175,8 +175,8 @@ class ApfSaController(BaseController):
                     self.failed_searches += 1
                     st.cooldown_until_s = t + min(p.trap_window_s * 2.0**st.failures, p.sa_backoff_max_s)
                     st.failures += 1
-                elif not self._room_to_escape(sc, offset, sees_behind):
-                    st.cooldown_until_s = t + p.trap_window_s  # no room to move across yet: wait in the lane
+                elif not (lane_runs_past(view, sc, offset) and self._room_to_escape(sc, offset, sees_behind)):
+                    st.cooldown_until_s = t + p.trap_window_s  # no lane past it, or no room to move across yet: wait
                 else:
                     self.escapes += 1
                     st.failures = 0

@@ -55,3 +55,33 @@ def waits_in_queue(sc, task, path_length_m: float, stood_s: float, reach_m: floa
     if stood_s >= patience_s:
         return False
     return queued_ahead(sc, [lk.s_stop_m for lk in task.links] + [path_length_m], reach_m)
+
+
+def chain_end_s(sc) -> float:
+    """Arc length of the front of the last vehicle in the chain ahead of the ego in its lane (moving or
+    not, each at most :data:`CHAIN_GAP_M` bumper to bumper behind the next, the first that close to the
+    ego's front); the ego's front when nothing is that close."""
+    end = sc.s + 0.5 * sc.length
+    if not len(sc.o_pos):
+        return end
+    s, half = sc.o_pos[:, 0], 0.5 * np.asarray(sc.o_length, float)
+    mine = np.flatnonzero((np.abs(sc.o_pos[:, 1] - sc.d) < LANE_HALF_M) & (s + half > end))
+    for k in mine[np.argsort(s[mine] - half[mine])]:
+        if s[k] - half[k] - end > CHAIN_GAP_M:
+            break
+        end = max(end, float(s[k] + half[k]))
+    return end
+
+
+def lane_runs_past(view, sc, offset_m: float) -> bool:
+    """Does a car at ``offset_m`` (d) stay within the ego's corridor from where it is until a car length and
+    :data:`CHAIN_GAP_M` beyond the end of the chain of vehicles ahead of it in its lane (:func:`chain_end_s`)?
+    An escape into a lane that leaves the route's corridor before that only leads back into the same
+    traffic (lyon_unseen, truth, seed 2, car74: in a queue moving off at 2-5 m/s towards a light 36 m on,
+    it escaped into the next lane, which the route leaves at the junction, drove up it at 9.5 m/s, met
+    the red and cut back into the queue, now standing, in a 3 m gap: contact)."""
+    s_end = min(chain_end_s(sc) + sc.length + CHAIN_GAP_M, view.length_m)
+    s = np.arange(sc.s, s_end + 1.0, 1.0)
+    lo, hi = view.corridor(s)
+    half = 0.5 * sc.width
+    return bool(np.all((lo + half <= offset_m) & (offset_m <= hi - half)))
