@@ -6,9 +6,8 @@ almost vanished (``|F| < trap_force_frac * F_att_max``, the field's local minimu
 holds it below cruise (an obstacle it cannot pass sits in its corridor): a car slowed in a bend is not
 trapped, one behind a stopped obstacle is -- but behind a queue at a stop line (:mod:`.queue`) it waits.
 
-Everything runs in the ego's route frame (s, d), like :mod:`.apf`. Simulated annealing (seed
-Fig. 2) on the field frozen at that instant: from x = the ego's centre (s, d),
-draw x1 = x + step (cos a, sin a) with a uniform; positions whose footprint leaves the lanes of the
+Everything runs in the ego's route frame (s, d), like :mod:`.apf`. Simulated annealing (seed Fig. 2) on the field
+frozen at that instant: from x = the ego's centre (s, d), draw x1 = x + step (cos a, sin a) with a uniform; positions whose footprint leaves the lanes of the
 ego's direction are refused; Delta = U(x1) - U(x); accept when Delta <= 0 or exp(-Delta/T) > u (u uniform);
 cool T <- T * ``sa_cooling`` after each draw; stop when the walk is at least ``sa_escape_m`` from
 the trap with a potential below the trap's (it has left the basin), or after ``sa_max_iter``
@@ -175,8 +174,9 @@ class ApfSaController(BaseController):
                     self.failed_searches += 1
                     st.cooldown_until_s = t + min(p.trap_window_s * 2.0**st.failures, p.sa_backoff_max_s)
                     st.failures += 1
-                elif not (lane_runs_past(view, sc, offset) and self._room_to_escape(sc, offset, sees_behind)):
-                    st.cooldown_until_s = t + p.trap_window_s  # no lane past it, or no room to move across yet: wait
+                elif not ((view.passing is not None or lane_runs_past(view, sc, offset)) and  # (a pass: its stretch)
+                          self._room_to_escape(sc, offset, sees_behind)):  # no lane past it, or no room yet: wait
+                    st.cooldown_until_s = t + p.trap_window_s
                 else:
                     self.escapes += 1
                     st.failures = 0
