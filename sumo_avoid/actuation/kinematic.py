@@ -8,10 +8,6 @@ the heading (a car slows down for a sharp turn and brakes when the desired veloc
 backwards). With ``max_reverse_speed_mps > 0`` a (nearly) stopped car whose desired direction is
 more than 90 degrees off its heading reverses towards it instead (no dead zone between
 forward and reverse in which a stopped car could do nothing).
-The rear axle (``rear_axle_m`` behind the centre) moves along the heading and the body turns about it, as
-a car's does: its tail swings out by the short rear overhang only. Turned about its centre, the tail of a
-car finishing a right turn swung 0.7 m sideways into the oncoming lane (bologna_pepoli, truth, seed 1: an
-oncoming car touched the ego's rear corner at the exit of junction 50).
 Pure numpy, vectorised over egos; no SUMO here. Parameters: the ``[actuators.kinematic]`` table.
 """
 from __future__ import annotations
@@ -44,9 +40,6 @@ class KinematicParams:
                                                   "a compact car with an 11 m kerb-to-kerb turning circle (outer front "
                                                   "wheel on 5.5 m, 2.65 m wheelbase, 1.55 m track) turns its centre on 4.25 m")
     max_reverse_speed_mps: float = field_doc(2.0, doc="reverse gear speed limit, m/s (0 = no reversing)")
-    rear_axle_m: float = field_doc(1.3, doc="how far the rear axle lies behind the vehicle's centre, m: the point that "
-                                           "moves along the heading (no sideways slip), half of a 2.65 m wheelbase "
-                                           "centred under the body; 0 turns the car about its centre")
 
 
 def actuate(pos, heading, speed, v_des, limits: KinematicParams, dt_s: float) -> Motion:
@@ -88,10 +81,7 @@ def actuate(pos, heading, speed, v_des, limits: KinematicParams, dt_s: float) ->
     new_heading = wrap_angle(heading + dtheta)
     mid = heading + 0.5 * dtheta
     step = new_speed * dt_s
-    a = limits.rear_axle_m
-    axle = pos - a * np.column_stack([np.cos(heading), np.sin(heading)])
-    axle = axle + np.column_stack([np.cos(mid), np.sin(mid)]) * step[:, None]
-    new_pos = axle + a * np.column_stack([np.cos(new_heading), np.sin(new_heading)])
+    new_pos = pos + np.column_stack([np.cos(mid), np.sin(mid)]) * step[:, None]
     return Motion(new_pos, new_heading, new_speed)
 
 

@@ -82,25 +82,3 @@ def test_a_stop_wish_with_a_direction_brakes_and_steers_that_way():
     for ang in (0.2, 3.0):
         m = actuate([[0.0, 0.0]], [0.0], [0.0], 1e-4 * np.array([[math.cos(ang), math.sin(ang)]]), KinematicParams(), 0.1)
         assert (m.speed[0], m.heading[0], *m.pos[0]) == (0.0, 0.0, 0.0, 0.0)
-
-
-def test_the_car_turns_about_its_rear_axle():
-    """Centre at the origin, heading 0, 5 m/s, desired velocity 90 degrees to the left (LIM): the forward
-    target 5 cos 90deg = 0 brakes it to 4.5 m/s (mean 4.75); yaw <= min(0.5, 4 / 4.75, 4.75 / 5) = 0.5 rad/s
-    -> 0.05 rad. The rear axle, 1.3 m behind the centre at (-1.3, 0), moves 0.45 m along the mid heading
-    0.025 rad; the centre lies 1.3 m ahead of it along the new heading 0.05:
-    x = -1.3 + 0.45 cos 0.025 + 1.3 cos 0.05, y = 0.45 sin 0.025 + 1.3 sin 0.05. The axle does not slip
-    sideways; the tail (2.4 m behind the centre) swings out by far less than that of a car turned about
-    its centre (rear_axle_m = 0)."""
-    lim = KinematicParams(**{**LIM.__dict__, "rear_axle_m": 1.3})
-    m = actuate([[0, 0]], [0.0], [5.0], [[0.0, 5.0]], lim, 0.1)
-    assert m.heading[0] == pytest.approx(0.05) and m.speed[0] == pytest.approx(4.5)
-    x = -1.3 + 0.45 * math.cos(0.025) + 1.3 * math.cos(0.05)
-    y = 0.45 * math.sin(0.025) + 1.3 * math.sin(0.05)
-    assert m.pos[0] == pytest.approx([x, y], abs=1e-12)
-    move = m.pos[0] - 1.3 * np.array([math.cos(0.05), math.sin(0.05)]) - np.array([-1.3, 0.0])
-    assert move[0] * math.sin(0.025) - move[1] * math.cos(0.025) == pytest.approx(0.0, abs=1e-12)  # no slip
-    centre = actuate([[0, 0]], [0.0], [5.0], [[0.0, 5.0]], KinematicParams(**{**LIM.__dict__, "rear_axle_m": 0.0}), 0.1)
-    tail = lambda mo: mo.pos[0, 1] - 2.4 * math.sin(mo.heading[0])  # noqa: E731  (sideways, + = into the turn)
-    assert tail(m) == pytest.approx(y - 2.4 * math.sin(0.05))  # -0.044 m
-    assert tail(centre) == pytest.approx(0.45 * math.sin(0.025) - 2.4 * math.sin(0.05))  # -0.109 m
