@@ -169,22 +169,18 @@ def foe_arrivals(foes: tuple[FoeLink, ...], signals, lanes: dict[str, list[int]]
             continue
         allway = foe.state == "w"
         yellow = state == "y"
-        for lane, offset in foe.approach:
-            for r in lanes.get(lane, ()):
-                x = offset - float(lane_pos[r])
-                if r in exclude or not x > -float(length[r]):
-                    continue
-                v = float(speed[r])
-                if (standing is not None and foe.state not in WAITS_FOR_EGO
-                        and stands_for_good(x - foe.line_m, v, *standing, r, foe.tls)):
-                    continue
-                if allway and order is not None and waits_its_turn(x - foe.line_m, x, v, *order, r):
-                    continue
-                if yellow and x - foe.line_m > 0.0 and can_give_way(x - foe.line_m, v, YELLOW_STOP_DECEL_MPS2):
-                    continue  # on yellow a foe that can stop at its line comfortably stops (SUMO's drivers do)
-                # at (or just past) its signal's stop line and slow: it is setting off, not cruising
-                starting = allway or (bool(foe.tls) and x - foe.line_m <= AT_LINE_M and v < START_MPS)
-                out.append((arrival_time(x, v, starting), r, x))
+        for r, x in _not_passed(foe, lanes, lane_pos, length, exclude):
+            v = float(speed[r])
+            if (standing is not None and foe.state not in WAITS_FOR_EGO
+                    and stands_for_good(x - foe.line_m, v, *standing, r, foe.tls)):
+                continue
+            if allway and order is not None and waits_its_turn(x - foe.line_m, x, v, *order, r):
+                continue
+            if yellow and x - foe.line_m > 0.0 and can_give_way(x - foe.line_m, v, YELLOW_STOP_DECEL_MPS2):
+                continue  # on yellow a foe that can stop at its line comfortably stops (SUMO's drivers do)
+            # at (or just past) its signal's stop line and slow: it is setting off, not cruising
+            starting = allway or (bool(foe.tls) and x - foe.line_m <= AT_LINE_M and v < START_MPS)
+            out.append((arrival_time(x, v, starting), r, x))
     return out
 
 
@@ -195,14 +191,18 @@ def clearing_arrivals(inside: tuple[FoeLink, ...], lanes: dict[str, list[int]], 
     passed them by their length: they are in the junction and clear it first, whatever their light now
     shows; one slower than START_MPS sets off (accelerating as from a standing start). One standing there
     waits (at its internal stop, for the ego): it is no arrival."""
-    out = []
-    for foe in inside:
-        for lane, offset in foe.approach:
-            for r in lanes.get(lane, ()):
-                x, v = offset - float(lane_pos[r]), float(speed[r])
-                if r not in exclude and x > -float(length[r]) and v >= STAND_MPS:
-                    out.append(arrival_time(x, v, v < START_MPS))
-    return out
+    speeds = ((x, float(speed[r])) for foe in inside for r, x in _not_passed(foe, lanes, lane_pos, length, exclude))
+    return [arrival_time(x, v, v < START_MPS) for x, v in speeds if v >= STAND_MPS]
+
+
+def _not_passed(foe: FoeLink, lanes: dict[str, list[int]], lane_pos, length, exclude: set[int]):
+    """(row, distance x of its front bumper to the conflict point, m) of each vehicle on ``foe``'s approach
+    lanes, not in ``exclude``, that has not passed the conflict point by its own length."""
+    for lane, offset in foe.approach:
+        for r in lanes.get(lane, ()):
+            x = offset - float(lane_pos[r])
+            if r not in exclude and x > -float(length[r]):
+                yield r, x
 
 
 def stands_for_good(to_line_m: float, v_mps: float, now_s: float, wait_s: float, since, row, tls: str) -> bool:

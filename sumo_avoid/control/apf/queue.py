@@ -24,16 +24,19 @@ CREEP_MPS = 2.5
 LANE_HALF_M = 1.6  # a vehicle whose centre is this close across to the ego's is in its lane, m
 
 
+def _in_lane_ahead(sc):
+    """(centre s (O,), half length (O,), indices of the vehicles in the ego's lane reaching past its front)."""
+    s, half = sc.o_pos[:, 0], 0.5 * np.asarray(sc.o_length, float)
+    return s, half, np.flatnonzero((np.abs(sc.o_pos[:, 1] - sc.d) < LANE_HALF_M) & (s + half > sc.s + 0.5 * sc.length))
+
+
 def queued_ahead(sc, stops_s, reach_m: float) -> bool:
     """Is the nearest vehicle ahead of the ego in its lane standing at the back of a queue whose first
     vehicle stands within ``reach_m`` of one of the stop lines ``stops_s`` (arc lengths on the path)?
     ``sc`` a :class:`~sumo_avoid.control.road_view.FrenetScene`."""
     if not len(sc.o_pos):
         return False
-    front = sc.s + 0.5 * sc.length
-    s, d = sc.o_pos[:, 0], sc.o_pos[:, 1]
-    half = 0.5 * np.asarray(sc.o_length, float)
-    mine = np.flatnonzero((np.abs(d - sc.d) < LANE_HALF_M) & (s + half > front))
+    s, half, mine = _in_lane_ahead(sc)
     if not len(mine):
         return False
     mine = mine[np.argsort(s[mine])]
@@ -64,8 +67,7 @@ def chain_end_s(sc) -> float:
     end = sc.s + 0.5 * sc.length
     if not len(sc.o_pos):
         return end
-    s, half = sc.o_pos[:, 0], 0.5 * np.asarray(sc.o_length, float)
-    mine = np.flatnonzero((np.abs(sc.o_pos[:, 1] - sc.d) < LANE_HALF_M) & (s + half > end))
+    s, half, mine = _in_lane_ahead(sc)
     for k in mine[np.argsort(s[mine] - half[mine])]:
         if s[k] - half[k] - end > CHAIN_GAP_M:
             break
