@@ -27,6 +27,7 @@ __all__ = [
     "pad_polygons",
     "ring_walls",
     "near_any",
+    "box_gap",
 ]
 
 
@@ -348,3 +349,12 @@ def near_any(points: np.ndarray, centres: np.ndarray, radius_m: float) -> np.nda
         dist, _ = cKDTree(centres).query(points[rest], k=1, distance_upper_bound=radius_m * (1 + 1e-9))
         near[rest] = dist <= radius_m
     return near
+
+
+def box_gap(lo_a, hi_a, lo_b, hi_b):
+    """Gap between M pairs of axis-aligned boxes ``[lo_a, hi_a]`` and ``[lo_b, hi_b]`` ((M, 2) corners each):
+    returns (distance (M,), unit direction (M, 2) from b towards a; zero where they overlap)."""
+    lo_a, hi_a, lo_b, hi_b = (np.asarray(x, float) for x in (lo_a, hi_a, lo_b, hi_b))
+    sep = np.where(lo_a > hi_b, lo_a - hi_b, np.where(lo_b > hi_a, hi_a - lo_b, 0.0))  # signed, b -> a
+    n = np.hypot(sep[:, 0], sep[:, 1])
+    return n, sep / np.maximum(n, 1e-12)[:, None]

@@ -233,3 +233,21 @@ def test_junction_widening_on_one_side_only_does_not_push_a_car_centred_on_its_l
     assert lane[1] == pytest.approx(10.0 * 0.10 / np.hypot(15.0, 0.10))
     # counted as widening on both sides (the old room), the kerb-side bound 0.6 m away pushes it across
     assert drv.field(scene(-1.6, 2.35, 0.0), np.array([[418.24, -0.10]]), target).F[0][1] > lane[1] + 1.0
+
+
+def test_the_push_from_a_car_beside_does_not_grow_as_the_ego_turns_away():
+    # bologna_signals, truth, seed 2, junction 1c (402.3-403.1 s, as recorded): a car coming up on the left
+    # (d 2.93, 1.4 m behind, 2.3 m/s against the ego's 1.6) pushed the ego right; counted from the turned
+    # footprint, whose rear corner swings towards it, the push grew from 57 to 718 as the ego turned 0.38 rad
+    # away, and it stood askew with its corner at people waiting at the kerb. Apart across the road, the push
+    # comes from the gap to the ego taken as aligned with the road: the same however it is turned.
+    from sumo_avoid.control.road_view import FrenetScene
+
+    sc = FrenetScene(516.75, 0.11, 0.0, np.array([1.6, 0.0]), 4.8, 1.8, np.array([[515.32, 2.93]]), np.array([0.13]),
+                     np.array([4.5]), np.array([1.8]), np.array([[2.3, 0.3]]),
+                     lambda s: (np.full(len(s), -1.6), np.full(len(s), 4.8)))
+    ctl, q, target = _driver(), np.array([[516.75, 0.11]]), np.array([531.75, 0.0])
+    straight = ctl.field(sc, q, target, heading=0.0).F[0]
+    turned = ctl.field(sc, q, target, heading=-0.38).F[0]
+    assert straight[1] < -1.0  # it does push the ego away from it
+    assert turned[1] == pytest.approx(straight[1])

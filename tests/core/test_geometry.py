@@ -6,6 +6,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 from sumo_avoid.core.geometry import (
+    box_gap,
     convex_distance,
     convex_overlap,
     footprint_corners,
@@ -190,3 +191,14 @@ def test_near_any_equals_the_kdtree_answer():
         r = float(rng.uniform(0, 300))
         ref = cKDTree(c).query(p, k=1, distance_upper_bound=r * (1 + 1e-9))[0] <= r
         assert np.array_equal(near_any(p, c, r), ref), k
+
+
+def test_box_gap_hand_values():
+    # a beside b across (d): 1 m apart, pointing from b to a along +d; diagonal 3-4-5; overlapping: 0
+    lo_a = np.array([[0.0, 0.0], [10.0, 5.0], [0.0, 0.0]])
+    hi_a = np.array([[4.0, 2.0], [12.0, 6.0], [4.0, 2.0]])
+    lo_b = np.array([[1.0, -2.0], [0.0, 0.0], [3.0, 1.0]])
+    hi_b = np.array([[3.0, -1.0], [7.0, 1.0], [5.0, 3.0]])
+    gap, to_a = box_gap(lo_a, hi_a, lo_b, hi_b)
+    np.testing.assert_allclose(gap, [1.0, 5.0, 0.0])
+    np.testing.assert_allclose(to_a, [[0.0, 1.0], [0.6, 0.8], [0.0, 0.0]])

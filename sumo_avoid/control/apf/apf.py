@@ -45,6 +45,7 @@ from sumo_avoid.control.base_controller import BaseController
 from sumo_avoid.control.road_view import FrenetScene, RoadView
 from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.geometry import (
+    box_gap,
     convex_distance,
     footprint_corners,
 )
@@ -188,6 +189,14 @@ class ApfDriver:
             # road only: passing it is no threat, drifting towards it is; a standing one the ego can
             # steer clear of in time within its lanes is passed the same way, at a crawl (_beside)
             beside, crawl, away, move, lat_closing = self._beside(sc, q_cand, h, ego_corners, oc, v_rel, away)
+            # one beside, or apart across the road from an ego turned away from it, pushes from the gap to the ego aligned
+            # with the road: turning away swings the rear corner towards it, and counted so the push grew as the car turned,
+            # until it stood 0.4 rad askew (bologna_signals seed 2, junction 1c: a car passing on its left, people at the kerb)
+            half = np.repeat(0.5 * np.array([[L, W]]), C, axis=0)
+            gap, to_ego = box_gap(np.repeat(q_cand - half, O, axis=0), np.repeat(q_cand + half, O, axis=0),
+                                  np.tile(oc.min(axis=1), (C, 1)), np.tile(oc.max(axis=1), (C, 1)))
+            apart = (to_ego[:, 1] != 0.0) & (beside | (h * to_ego[:, 1] > 0.0))  # (to_ego across: -side)
+            beside, rho, away = beside | apart, np.where(apart, gap, rho), np.where(apart[:, None], to_ego, away)
             # its influence distance is the clearance kept beside a car plus the lateral stopping
             # distance of its closing speed: the ego's own speed (the headway term, for following)
             # does not count, so a lane-centred car in the next lane does not push the ego at all
