@@ -189,14 +189,14 @@ class ApfDriver:
             # road only: passing it is no threat, drifting towards it is; a standing one the ego can
             # steer clear of in time within its lanes is passed the same way, at a crawl (_beside)
             beside, crawl, away, move, lat_closing = self._beside(sc, q_cand, h, ego_corners, oc, v_rel, away)
-            # one beside pushes from the gap to the ego aligned with the road (_beside): turning away swings the rear corner
-            # towards it, and counted so the push grew as the car turned, until it stood 0.4 rad askew (bologna_signals
-            # seed 2, junction 1c: a car passing on its left, people at the kerb)
+            # one beside, or apart across the road from an ego turned away from it, pushes from the gap to the ego aligned
+            # with the road: turning away swings the rear corner towards it, and counted so the push grew as the car turned,
+            # until it stood 0.4 rad askew (bologna_signals seed 2, junction 1c: a car passing on its left, people at the kerb)
             half = np.repeat(0.5 * np.array([[L, W]]), C, axis=0)
             gap, to_ego = box_gap(np.repeat(q_cand - half, O, axis=0), np.repeat(q_cand + half, O, axis=0),
                                   np.tile(oc.min(axis=1), (C, 1)), np.tile(oc.max(axis=1), (C, 1)))
-            apart = beside & (to_ego[:, 1] != 0.0)
-            rho, away = np.where(apart, gap, rho), np.where(apart[:, None], to_ego, away)
+            apart = (to_ego[:, 1] != 0.0) & (beside | (h * to_ego[:, 1] > 0.0))  # (to_ego across: -side)
+            beside, rho, away = beside | apart, np.where(apart, gap, rho), np.where(apart[:, None], to_ego, away)
             # its influence distance is the clearance kept beside a car plus the lateral stopping
             # distance of its closing speed: the ego's own speed (the headway term, for following)
             # does not count, so a lane-centred car in the next lane does not push the ego at all
@@ -245,10 +245,10 @@ class ApfDriver:
         o_lo, o_hi = np.tile(oc[..., 1].min(1), C), np.tile(oc[..., 1].max(1), C)
         side = np.sign(np.tile(sc.o_pos[:, 1], C) - np.repeat(q_cand[:, 1], O))
         lat_closing = np.maximum(v_rel[:, 1] * side, 0.0)
-        # the ego's d span taken as aligned with the road (turned away from the vehicle, its rear corner swings towards
-        # it; whether it is beside must not flip as it turns: bologna_signals seed 2 wobbled 0.2 rad at 3 m/s)
+        beside = (e_lo - p.gov_margin_m > o_hi) | (e_hi + p.gov_margin_m < o_lo)
+        # the ego's d span taken as aligned with the road (for a squeeze and a VRU beside: turned away from the
+        # vehicle, its rear corner swings towards it)
         a_lo, a_hi = np.repeat(q_cand[:, 1], O) - 0.5 * sc.width, np.repeat(q_cand[:, 1], O) + 0.5 * sc.width
-        beside = (a_lo - p.gov_margin_m > o_hi) | (a_hi + p.gov_margin_m < o_lo)
         passable, shift = self._squeeze(sc, q_cand, oc, (a_lo, a_hi), (o_lo, o_hi), side, lat_closing)
         squeeze = ~beside & passable
         o_speed = np.tile(np.hypot(*sc.o_vel.T), C)
