@@ -136,7 +136,6 @@ class TrafficRulesLayer:
         self._yields: set[tuple[str, float]] = set()  # (ego, stop line s) where the ego gave way
         self._allway = False  # an ego's route crosses an all-way stop: follow who stands since when
         self._foes = False  # an ego's route has a link with foes: follow who stands since when (foes for good)
-        self._wide = False  # ... or a wide exit (a car stuck in the junction for good holds it no longer)
         self._tls_since: dict[str, tuple[str, float]] = {}  # light id -> (its state, since when), s
         self._stand: dict[str, tuple] = {}  # vehicle id -> (start, end (nan: still)) of its last standing run, s
         self._turn_radius_m = float(getattr(ctx, "turn_radius_m", 0.0) or 0.0)  # 0: no drivable line, no wide exits
@@ -150,7 +149,6 @@ class TrafficRulesLayer:
         self._egos[task.vid] = _Ego(task, watch, wide=wide)
         self._allway |= any(lk.state == "w" and lk.foes for lk in task.links)
         self._foes |= any(lk.foes for lk in task.links)
-        self._wide |= bool(wide)
 
     def _track_standing(self, obs) -> None:
         """When each vehicle near an ego came to stand (for the order of arrival at all-way stops,
@@ -181,11 +179,6 @@ class TrafficRulesLayer:
             light = self._tls_since.get(tls, ("", -math.inf))[1] if tls else -math.inf
             return max(start if end != end else t, light)
         return since
-
-    def _stuck(self, snap):
-        """stuck(row): standing for ``standing_foe_wait_s`` or longer (in the junction, too: a gridlock)."""
-        since, t, wait = self._standing_since(snap), snap.time_s, self.p.standing_foe_wait_s
-        return lambda r: bool(snap.speed[r] < STAND_MPS) and t - since(r, "") >= wait
 
     def remove_ego(self, vid: str) -> None:
         self._egos.pop(vid, None)
@@ -230,7 +223,7 @@ class TrafficRulesLayer:
                     return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
             wide = e.wide.get(k)
             if (wide is not None and not late and d > 0 and
-                    oncoming_first(wide, e.s_m, lanes, snap.lane_pos, snap.speed, self._stuck(snap)) < p.gap_margin_s):
+                    oncoming_first(wide, e.s_m, lanes, snap.lane_pos, snap.speed) < p.gap_margin_s):
                 return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
             if link.inside and d > 0 and not late:  # who is in the junction clears it first, on any link
                 clearing = clearing_arrivals(link.inside, lanes, snap.lane_pos, snap.speed, snap.length, {row})
@@ -266,7 +259,7 @@ class TrafficRulesLayer:
         snap = obs.snapshot
         out = np.array(command, dtype=float, copy=True)
         lanes = None
-        if self._allway or self._foes or self._wide:
+        if self._allway or self._foes:
             self._track_standing(obs)
         for i, vid in enumerate(obs.ego_ids):
             e = self._egos.get(vid)

@@ -101,22 +101,16 @@ def wide_exits(task: EgoTask, turn_radius_m: float) -> dict[int, WideExit]:
 
 
 def oncoming_first(wide: WideExit, s_front_m: float, lanes: dict[str, list[int]],
-                   lane_pos, speed, stuck=None) -> float:
+                   lane_pos, speed) -> float:
     """(earliest arrival of an oncoming vehicle at the wide exit) - (when the ego has cleared it), s:
-    the ego must wait while this is below the gap margin. +inf when no vehicle comes. ``stuck(row)``:
-    a vehicle that has stood so long it is not coming (a gridlock; the rules' ``standing_foe_wait_s``)
-    holds nothing -- the ego's road view keeps it an obstacle (unseen Istanbul district: three egos
-    stood 250-280 s at a wide turn behind such a car while SUMO's drivers went)."""
+    the ego must wait while this is below the gap margin. +inf when no vehicle comes."""
     t_clear = max(wide.s_clear_m - s_front_m, 0.0) / TURN_CRAWL_MPS
-
-    def rows(lane):
-        return [r for r in lanes.get(lane, ()) if stuck is None or not stuck(r)]
-    if any(rows(lane) for lane in wide.inside) or any(
-            float(lane_pos[r]) < LEAVING_CLEAR_M for lane in wide.leaving for r in rows(lane)):
+    if any(lanes.get(lane) for lane in wide.inside) or any(
+            float(lane_pos[r]) < LEAVING_CLEAR_M for lane in wide.leaving for r in lanes.get(lane, ())):
         return -np.inf  # a car still crossing the junction or just out of it beside the ego's wide entry
     first = np.inf
     for lane, offset, waits in wide.conflicts:
-        for r in rows(lane):
+        for r in lanes.get(lane, ()):
             # past the conflict point it is in the ego's sweep until it has left its lane (then ``inside``),
             # unless it stands there and may wait for the ego (RoadView keeps it an obstacle)
             x, v = offset - float(lane_pos[r]), float(speed[r])

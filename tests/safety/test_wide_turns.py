@@ -56,21 +56,6 @@ def test_oncoming_first_hand_computed():
     assert _first([("B", 20.0, 6.0)]) == math.inf  # ... and clear of it
 
 
-def test_a_car_stuck_in_the_junction_holds_the_wide_turn_no_longer():
-    # unseen Istanbul district (Besiktas, truth, seed 1): three egos stood 250-280 s at a wide turn while
-    # cars stood for good in its junction (a gridlock SUMO's drivers left); one that has stood standing_foe_wait_s
-    # is stuck (TrafficRulesLayer._stuck): it holds nothing, whichever check it would trip
-    rows = [("I", 3.0, 0.0), ("B", 5.0, 0.0), ("K", 85.0, 0.0), ("L", 50.0, 10.0)]
-    lanes: dict[str, list[int]] = {}
-    for r, (lane, _, _) in enumerate(rows):
-        lanes.setdefault(lane, []).append(r)
-    pos, speed = np.array([p for _, p, _ in rows], float), np.array([v for _, _, v in rows], float)
-    assert oncoming_first(WIDE, 110.0, lanes, pos, speed) == -math.inf
-    assert oncoming_first(WIDE, 110.0, lanes, pos, speed, lambda r: r in (0,)) == -math.inf  # B still there
-    stuck = oncoming_first(WIDE, 110.0, lanes, pos, speed, lambda r: r in (0, 1, 2))
-    assert stuck == pytest.approx(30.0 / 10.0 - 5.0)  # only the car coming on L counts
-
-
 @pytest.fixture(scope="module")
 def nets(tmp_path_factory):
     d = tmp_path_factory.mktemp("wide")
