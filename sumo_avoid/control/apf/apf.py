@@ -192,10 +192,10 @@ class ApfDriver:
             # one beside, or apart across the road from an ego turned away from it, pushes from the gap to the ego aligned
             # with the road: turning away swings the rear corner towards it, and counted so the push grew as the car turned,
             # until it stood 0.4 rad askew (bologna_signals seed 2, junction 1c: a car passing on its left, people at the kerb)
-            half = np.repeat(0.5 * np.array([[L, W]]), C, axis=0)
+            half = 0.5 * np.array([L, W])
             gap, to_ego = box_gap(np.repeat(q_cand - half, O, axis=0), np.repeat(q_cand + half, O, axis=0),
                                   np.tile(oc.min(axis=1), (C, 1)), np.tile(oc.max(axis=1), (C, 1)))
-            apart = (to_ego[:, 1] != 0.0) & (beside | (h * to_ego[:, 1] > 0.0))  # (to_ego across: -side)
+            apart = (to_ego[:, 1] != 0.0) & (beside | (h * to_ego[:, 1] > 0.0))  # turned away: h the sign of to_ego's d
             beside, rho, away = beside | apart, np.where(apart, gap, rho), np.where(apart[:, None], to_ego, away)
             # its influence distance is the clearance kept beside a car plus the lateral stopping
             # distance of its closing speed: the ego's own speed (the headway term, for following)
