@@ -28,6 +28,7 @@ from sumo_avoid.road.lane_index import LaneIndex
 from sumo_avoid.road.polyline import polyline_length, polyline_point_at, polyline_project
 from sumo_avoid.road.right_of_way import RightOfWay
 from sumo_avoid.road.route_plan import RoutePlan, RoutePlanner, kerb_room
+from sumo_avoid.road.uturns import without_uturns
 
 
 WALKWAY_TOL_M = 0.3  # a point this close to a sidewalk or walking area is on it (Road.on_walkway), m
@@ -281,6 +282,10 @@ class Road:
             return plan
         return plan._replace(lanes=kerb_room(plan, self.on_walkway))
 
+
+    def without_uturns(self, edge_ids, vclass: str | None):
+        """The fastest route round the U-turns of route ``edge_ids``, or None (:mod:`sumo_avoid.road.uturns`)."""
+        return without_uturns(self._net, edge_ids, vclass)
 
     # ------------------------------------------------------------------ plotting support
     def lane_lines(self, kind: str | None = None) -> list[np.ndarray]:

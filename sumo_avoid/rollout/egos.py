@@ -14,7 +14,7 @@ from sumo_avoid.core.types import EgoTask
 
 class EgoBook:
     def __init__(self, ego_ids, road, *, goal=None, goals=None, goal_tolerance_m: float, cruise_speed_mps: float,
-                 uses_goals: bool = True, follow_routes: bool = True, drives: bool = True):
+                 uses_goals: bool = True, follow_routes: bool = True, drives: bool = True, turn_radius_m: float = 0.0):
         self.ids = frozenset(ego_ids)
         self.road = road
         self.goal = goal  # every ego's goal: [x, y], an edge id, or None: the end of each ego's route path
@@ -24,6 +24,8 @@ class EgoBook:
         self.uses_goals = uses_goals
         self.follow_routes = follow_routes  # SUMO keeps each ego on its route's lanes (not in an arena)
         self.drives = drives  # the plug-in moves the egos; False: SUMO's driver does (controller "sumo")
+        self.turn_radius_m = turn_radius_m  # the egos' smallest turning radius (0: none, they may turn on the spot)
+        self.detours: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {}  # ego -> (its route, the one it drives)
         self.goals: dict[str, tuple[float, float]] = {}  # ego id -> goal (x, y), m (egos with a goal)
         self.active: dict[str, EgoTask] = {}  # driven now, in take-over order
         self.tasks: dict[str, EgoTask] = {}  # every ego taken over (for the metrics)
@@ -40,10 +42,10 @@ class EgoBook:
 
     def take_over(self, sim, vid: str) -> EgoTask:
         info = sim.take_over(vid, drive=self.drives)
-        path, links, limits, lanes = self.road.route(list(info.route_edges), depart_lane=info.lane_index,
-                                                     vclass=info.vclass)
-        goal = self._goal_point(vid, list(info.route_edges), path, links)
-        if not self.drives and self._goal_is_route_end(vid, list(info.route_edges)):
+        edges = self._round_uturns(sim, vid, info)
+        path, links, limits, lanes = self.road.route(edges, depart_lane=info.lane_index, vclass=info.vclass)
+        goal = self._goal_point(vid, edges, path, links)
+        if not self.drives and self._goal_is_route_end(vid, edges):
             self._route_end.add(vid)
         if self.uses_goals:
             self.goals[vid] = (float(goal[0]), float(goal[1]))
@@ -54,6 +56,24 @@ class EgoBook:
         if self.follow_routes and self.drives:
             sim.follow_route(task)
         return task
+
+    def _round_uturns(self, sim, vid: str, info) -> list[str]:
+        """The ego's route, or where it has a U-turn, the fastest route round it to the same last edge
+        (:mod:`sumo_avoid.road.uturns`: a car with a turning radius does not turn on the spot), given to
+        SUMO too and said in its log. An ego SUMO drives turns as SUMO's drivers do; a goal edge the detour
+        misses keeps the route."""
+        edges = list(info.route_edges)
+        if not self.drives or not self.follow_routes or self.turn_radius_m <= 0.0:
+            return edges
+        new = self.road.without_uturns(edges, info.vclass)
+        goal = self.goal_of.get(vid, self.goal)
+        if new is None or (isinstance(goal, str) and goal not in new):
+            return edges
+        sim.set_route(vid, new)
+        sim.note(f"sumo-avoid: ego '{vid}' drives round the U-turn(s) on its route (a car does not turn on the "
+                 f"spot): {len(edges)} -> {len(new)} edges, to the same last edge {new[-1]}")
+        self.detours[vid] = (tuple(edges), tuple(new))
+        return list(new)
 
     def _goal_point(self, vid: str, edges: list[str], path: np.ndarray, links) -> np.ndarray:
         """(2,) goal of one ego: its point, or where its route path leaves its goal edge (the stop

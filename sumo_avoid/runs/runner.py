@@ -99,7 +99,7 @@ class OpenRun:
         self.egos = EgoBook(set(spec.ego.ids) | set(arena.ids if arena else ()), road, goal=spec.ego.goal, goals=spec.ego.goals,
                             goal_tolerance_m=spec.ego.goal_tolerance_m, cruise_speed_mps=spec.ego.cruise_speed_mps,
                             uses_goals=type(self.controller).needs.goals, follow_routes=arena is None,
-                            drives=type(self.controller).needs.drives)
+                            drives=type(self.controller).needs.drives, turn_radius_m=ctx.turn_radius_m)
         self.ssm = SsmParams() if arena is None and spec.ego.ids else None  # lanes to measure on: not in an arena
         self.log_file = log_file
         self._tmp = None

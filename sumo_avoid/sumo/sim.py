@@ -269,6 +269,11 @@ class SumoSim:
         return EgoInfo(vid, self._routes[vid], libsumo.vehicle.getLaneIndex(vid), libsumo.vehicle.getWidth(vid),
                        libsumo.vehicle.getLength(vid), self._vclass.get(vid) or libsumo.vehicle.getVehicleClass(vid))
 
+    def set_route(self, vid: str, edges) -> None:
+        """Give ego ``vid`` (taken over, on ``edges[0]``) the route ``edges`` in SUMO too."""
+        libsumo.vehicle.setRoute(vid, list(edges))
+        self._routes[vid] = tuple(edges)
+
     def follow_route(self, task: EgoTask) -> None:
         """Keep ego ``task.vid`` on its route in SUMO's view while it drives on it (:mod:`.placement`)."""
         self._placement.follow(task, self._routes.get(task.vid, ()))
