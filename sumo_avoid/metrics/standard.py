@@ -250,10 +250,11 @@ class PluginStats(Metric):
 
 
 class Motion(Metric):
-    """Goal reached, time to goal, path length, mean speed, per ego."""
+    """Goal reached, time to goal, path length, mean speed, per ego; how many egos drove round a U-turn of their
+    route (``route_detours``, rollout.egos: their routes differ from SUMO's driver's on the same scenario)."""
 
-    keys = Keys(("goal_reached", "time_to_goal_s", "path_length_m", "mean_speed_mps"), nested=("per_ego",))
+    keys = Keys(("goal_reached", "time_to_goal_s", "path_length_m", "mean_speed_mps", "route_detours"), nested=("per_ego",))
 
     def compute(self, run: RunResult) -> dict:
-        return basic.motion_summary(run.traj, run.goals, run.scenario.spec.ego.goal_tolerance_m, ego_rows(run),
-                                    arrivals=run.arrivals)
+        return {**basic.motion_summary(run.traj, run.goals, run.scenario.spec.ego.goal_tolerance_m, ego_rows(run),
+                                       arrivals=run.arrivals), "route_detours": len(run.detours)}

@@ -37,6 +37,7 @@ class RunResult:
     # ego id -> time of its last recorded step, s: egos SUMO's driver drove to their route's end, their goal
     # (controller "sumo"; rollout.egos.EgoBook.arrivals): they reached it (metrics.basic.motion_summary)
     arrivals: dict = field(default_factory=dict)
+    detours: dict = field(default_factory=dict)  # ego id -> (its route, the one it drove round U-turns) (EgoBook)
     _memo: dict = field(default_factory=dict, compare=False, repr=False)
 
     @property

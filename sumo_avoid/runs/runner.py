@@ -155,7 +155,7 @@ class OpenRun:
                          steps, sim_time, self.stack.stats(),
                          {"setup_s": self.t_loop - self.t_start, "loop_s": t_end - self.t_loop, "total_s": t_end - self.t_start},
                          tables, egos.tasks, recorder.signals(), ssm=self.ssm, persons=recorder.persons(),
-                         classes=recorder.classes(), arrivals=self.egos.arrivals)
+                         classes=recorder.classes(), arrivals=self.egos.arrivals, detours=dict(egos.detours))
 
 
 def run(scn, *, log_file=None, progress: bool = False, callbacks=()) -> RunResult:

@@ -71,4 +71,6 @@ def test_an_ego_drives_round_a_turnaround_on_the_road(nets, tmp_path):
     m = outputs.run_metrics(res)
     assert m["goal_reached"] and m["collisions"] == 0 and m["off_road_m"] == 0.0 and m["phi_wall"] <= 0.1
     assert polyline_length(res.tasks["ego"].path) > 5 * 80 - 40  # round the block, not on the spot
-    assert m["path_length_m"] > 5 * 80 - 40
+    assert m["path_length_m"] > 5 * 80 - 40 and m["route_detours"] == 1
+    given, driven = res.detours["ego"]
+    assert given == ("A0B0", "B0A0") and len(driven) == 6 and driven[0] == "A0B0" and driven[-1] == "B0A0"
