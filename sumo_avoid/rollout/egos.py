@@ -60,15 +60,15 @@ class EgoBook:
     def _round_uturns(self, sim, vid: str, info) -> list[str]:
         """The ego's route, or where it has a U-turn, the fastest route round it to the same last edge
         (:mod:`sumo_avoid.road.uturns`: a car with a turning radius does not turn on the spot), given to
-        SUMO too and said in its log. An ego SUMO drives turns as SUMO's drivers do; a goal edge the detour
-        misses keeps the route."""
+        SUMO too and said in its log. An ego SUMO drives turns as SUMO's drivers do; one with a goal point, or
+        a goal edge the detour misses, keeps its route."""
         edges = list(info.route_edges)
         if not self.drives or not self.follow_routes or self.turn_radius_m <= 0.0:
             return edges
         new = self.road.without_uturns(edges, info.vclass)
         goal = self.goal_of.get(vid, self.goal)
-        if new is None or (isinstance(goal, str) and goal not in new):
-            return edges
+        if new is None or (goal is not None and not (isinstance(goal, str) and goal in new)):
+            return edges  # a goal point, or a goal edge the detour would miss: the route it was given
         sim.set_route(vid, new)
         sim.note(f"sumo-avoid: ego '{vid}' drives round the U-turn(s) on its route (a car does not turn on the "
                  f"spot): {len(edges)} -> {len(new)} edges, to the same last edge {new[-1]}")
