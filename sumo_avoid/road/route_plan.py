@@ -38,15 +38,15 @@ def _lane_centres(lanes) -> tuple[tuple[float, ...], np.ndarray]:
     return tuple(w.tolist()), np.cumsum(w) - 0.5 * w
 
 
-def _opposite_width(e, vclass: str | None) -> float:
-    """Width of the lane beside ``e``'s leftmost one on the edge running the other way between the same
-    junctions, if ``vclass`` may use it (0 otherwise, or when there is no such edge)."""
+def _opposite(e, vclass: str | None) -> tuple[float, str]:
+    """(width, id) of the lane beside ``e``'s leftmost one on the edge running the other way between the same
+    junctions, if ``vclass`` may use it ((0, "") otherwise, or when there is no such edge)."""
     a, b = e.getFromNode(), e.getToNode()
     for r in b.getOutgoing():
         if r.getToNode() is a and r.getID() != e.getID() and r.getFunction() == "":
             lane = max(r.getLanes(), key=lambda ln: ln.getIndex())
-            return float(lane.getWidth()) if vclass is None or lane.allows(vclass) else 0.0
-    return 0.0
+            return (float(lane.getWidth()), lane.getID()) if vclass is None or lane.allows(vclass) else (0.0, "")
+    return 0.0, ""
 
 
 def _first_allowed(lanes, vclass: str | None) -> int:
@@ -156,7 +156,7 @@ class RoutePlanner:
         pieces: list[np.ndarray] = []
         link_at: list[tuple[object, int]] = []  # (connection, points before its stop line)
         limit_at: list[tuple[float, int]] = []  # (speed limit, points before its lane piece)
-        piece_at: list[tuple] = []  # (edge, lane, offsets at start, offsets at end, widths, allowed, opposite width, points before it)
+        piece_at: list[tuple] = []  # (edge, lane, offsets at start, offsets at end, widths, allowed, (opposite width, lane), points before it)
         entry = depart_lane
         for k, e in enumerate(edges):
             nxt = edges[k + 1] if k + 1 < len(edges) else None
@@ -168,7 +168,7 @@ class RoutePlanner:
                 for lane, shape, speed in self._via_lanes(conn):
                     limit_at.append((speed, n_points))
                     piece_at.append((lane.getEdge().getID(), lane.getIndex(), (0.0,), (0.0,),
-                                     (float(lane.getWidth()),), (), 0.0, n_points))
+                                     (float(lane.getWidth()),), (), (0.0, ""), n_points))
                     pieces.append(shape)
                     n_points += len(shape)
                 entry = conn.getToLane().getIndex()
@@ -209,7 +209,7 @@ class RoutePlanner:
         limit_at.append((float(lanes[exit_idx].getSpeed()), n_points))
         widths, centres = _lane_centres(lanes)
         exit_off = tuple((centres - centres[exit_idx]).tolist())
-        opp = _opposite_width(e, vclass)
+        opp = _opposite(e, vclass)
         if entry_idx == exit_idx:
             pieces.append(exit_shape)
             piece_at.append((e.getID(), exit_idx, exit_off, exit_off, widths, allowed, opp, n_points))
@@ -238,7 +238,7 @@ class RoutePlanner:
         limits = np.array([(s_at(n), v) for v, n in limit_at], float).reshape(-1, 2)
         starts = [s_at(n) for *_, n in piece_at]
         ends = starts[1:] + [float(cum[-1])]
-        lane_pieces = tuple(LanePiece(a, max(a, b), edge, lane, o0, o1, w, ok, opp)
+        lane_pieces = tuple(LanePiece(a, max(a, b), edge, lane, o0, o1, w, ok, *opp)
                             for (edge, lane, o0, o1, w, ok, opp, _), a, b in zip(piece_at, starts, ends))
         return RoutePlan(path, links, limits, lane_pieces)
 

@@ -30,6 +30,9 @@ Per ego and step, with s the arc length of the ego's front bumper projected on i
 * **Wide exits.** Where a turn is too tight for the car and its drivable line swings into the
   oncoming lane of the exit edge, the ego is held at its stop line until that lane is clear for
   the time it takes to make the turn (:mod:`sumo_avoid.safety.wide_turns`), on any link.
+* **Narrow streets.** Before a stretch of its route where its lanes and the oncoming lane are together
+  too narrow for it and an oncoming car to pass, the ego is held the same way while such a car is on
+  it or arrives before the ego is through (:mod:`sumo_avoid.safety.narrow_streets`).
 * **Stop signs.** At a link whose state is 's' (stop) or 'w' (all-way stop) the ego is held by
   the braking curve until it has stood (slower than ``stop_speed_mps``) with its front within
   ``stop_zone_m`` of its stop position; then it only gives way as above.
@@ -65,6 +68,7 @@ from sumo_avoid.road.polyline import polyline_point_at, polyline_track
 from sumo_avoid.road.regulation import RED, STOP_SIGNS, RulesParams
 from sumo_avoid.core.types import EgoTask, Keys
 from sumo_avoid.safety.crossing_rule import CrossingRule
+from sumo_avoid.safety.narrow_streets import narrow_cap, narrow_stretches
 from sumo_avoid.safety.wide_turns import oncoming_first, wide_exits
 from sumo_avoid.road.yielding import (
     STAND_MPS,
@@ -99,6 +103,7 @@ class _Ego:
     yellow: dict = field(default_factory=dict)  # link position in task.links -> STOP | GO at the yellow's onset
     stopped: dict = field(default_factory=dict)  # link position of a stop sign where the ego has stood -> since when, s
     wide: dict = field(default_factory=dict)  # link position -> its wide exit into oncoming traffic (wide_turns)
+    narrow: tuple = ()  # stretches too narrow to pass an oncoming car (narrow_streets)
 
 
 def signal_char(signals, link) -> str:
@@ -144,9 +149,10 @@ class TrafficRulesLayer:
 
     def add_ego(self, task: EgoTask) -> None:
         wide = wide_exits(task, self._turn_radius_m)
+        narrow = narrow_stretches(task) if task.lanes else ()
         watch = (any(lk.tls or lk.foes or lk.inside or lk.state in STOP_SIGNS or lk.crossings for lk in task.links) or bool(wide)
-                 or self.p.speed_factor is not None)
-        self._egos[task.vid] = _Ego(task, watch, wide=wide)
+                 or bool(narrow) or self.p.speed_factor is not None)
+        self._egos[task.vid] = _Ego(task, watch, wide=wide, narrow=narrow)
         self._allway |= any(lk.state == "w" and lk.foes for lk in task.links)
         self._foes |= any(lk.foes for lk in task.links)
 
@@ -284,11 +290,16 @@ class TrafficRulesLayer:
             cross, cline = self._crossings.cap(e.task, e.s_m, v, snap, int(r), float(snap.length[r]), float(snap.width[r]))
             if cross < v or cross < 0.5:
                 self._crossing_yields.add((vid, cline))
-            cap = min(sig, road, give, cross)
+            # a street too narrow to pass an oncoming car: wait before it (narrow_streets; an episode of giving way)
+            narrow, nline = (narrow_cap(e.narrow, e.s_m, v, float(snap.width[r]), snap, lanes, self.p)
+                             if e.narrow else (math.inf, -1.0))
+            if narrow < v or narrow < 0.5:
+                self._yields.add((vid, nline))
+            cap = min(sig, road, give, cross, narrow)
             if speed > cap:
-                self._caps += road < min(sig, give, cross)
+                self._caps += road < min(sig, give, cross, narrow)
                 out[i] *= cap / speed
-                if min(sig, cross) <= cap and cap < HELD_MPS:
+                if min(sig, cross, narrow) <= cap and cap < HELD_MPS:
                     # held at a line: wait lined up with the lane, not already turned into the junction
                     # (a car standing askew at its line blocks the next lane and its corner the sidewalk)
                     out[i] = cap * _direction(e.task.path, e.s_m)
