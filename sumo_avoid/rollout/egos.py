@@ -69,7 +69,8 @@ class EgoBook:
         goal = self.goal_of.get(vid, self.goal)
         if new is None or (goal is not None and not (isinstance(goal, str) and goal in new)):
             return edges  # a goal point, or a goal edge the detour would miss: the route it was given
-        sim.set_route(vid, new)
+        if not sim.set_route(vid, new):
+            return edges
         sim.note(f"sumo-avoid: ego '{vid}' drives round the U-turn(s) on its route (a car does not turn on the "
                  f"spot): {len(edges)} -> {len(new)} edges, to the same last edge {new[-1]}")
         self.detours[vid] = (tuple(edges), tuple(new))

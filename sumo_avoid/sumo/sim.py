@@ -269,10 +269,16 @@ class SumoSim:
         return EgoInfo(vid, self._routes[vid], libsumo.vehicle.getLaneIndex(vid), libsumo.vehicle.getWidth(vid),
                        libsumo.vehicle.getLength(vid), self._vclass.get(vid) or libsumo.vehicle.getVehicleClass(vid))
 
-    def set_route(self, vid: str, edges) -> None:
-        """Give ego ``vid`` (taken over, on ``edges[0]``) the route ``edges`` in SUMO too."""
-        libsumo.vehicle.setRoute(vid, list(edges))
+    def set_route(self, vid: str, edges) -> bool:
+        """Give ego ``vid`` (taken over, on ``edges[0]``) the route ``edges`` in SUMO too; False (and its route
+        kept, SUMO's reason in its log) where SUMO refuses it."""
+        try:
+            libsumo.vehicle.setRoute(vid, list(edges))
+        except libsumo.TraCIException as e:
+            self.note(f"sumo-avoid: SUMO refused the route round the U-turn(s) for ego '{vid}': {e}")
+            return False
         self._routes[vid] = tuple(edges)
+        return True
 
     def follow_route(self, task: EgoTask) -> None:
         """Keep ego ``task.vid`` on its route in SUMO's view while it drives on it (:mod:`.placement`)."""

@@ -364,3 +364,52 @@ def test_output_metrics_adds_to_the_standard_set():
                                  "rules", "crossings", "road_use", "comfort", "ssm", "ttc2d", "flocking")
     m = run_metrics(runner.run(scn))
     assert {"goal_reached", "collisions", "min_gap_m", "mu", "v_vel", "wrong_way_m", "min_ttc_s", "min_ttc2d_s"} <= set(m)
+
+
+class UturnRoad(StraightRoad):
+    """A road whose route planner finds a way round the route's U-turn: ("r", "x", "y") -> ("r", "z", "y")."""
+
+    def without_uturns(self, edges, vclass):
+        return ("r", "z", "y") if tuple(edges) == ("r", "x", "y") else None
+
+    def route(self, edges, depart_lane=None, vclass=None):  # a junction link after each edge (a goal edge's stop line)
+        path, _, limits, lanes = super().route(edges, depart_lane, vclass)
+        return path, tuple(type("Link", (), {"s_stop_m": 30.0 * (k + 1)})() for k in range(len(edges))), limits, lanes
+
+
+class UturnSim(FakeSim):
+    def __init__(self, accept: bool):
+        super().__init__()
+        self.accept, self.routes, self.notes = accept, [], []
+
+    def take_over(self, vid, drive=True):
+        info = super().take_over(vid, drive)
+        info.route_edges = ("r", "x", "y")
+        return info
+
+    def set_route(self, vid, edges):
+        self.routes.append((vid, tuple(edges)))
+        return self.accept
+
+    def note(self, text):
+        self.notes.append(text)
+
+
+@pytest.mark.parametrize("accept, radius, goal, drives, detour", [
+    (True, 4.25, None, True, True),  # SUMO takes the route round the U-turn: the ego drives it
+    (False, 4.25, None, True, False),  # SUMO refuses it: the route it was given
+    (True, 0.0, None, True, False),  # no turning radius (it may turn on the spot): no detour
+    (True, 4.25, [100.0, 0.0], True, False),  # a goal point may lie on the stretch the detour leaves out
+    (True, 4.25, "z", True, True),  # a goal edge on the detour
+    (True, 4.25, "x", True, False),  # ... and one the detour misses
+    (True, 4.25, None, False, False),  # SUMO's driver turns on the spot
+])
+def test_an_ego_is_given_the_route_round_its_u_turn_where_it_can(accept, radius, goal, drives, detour):
+    sim = UturnSim(accept)
+    sim.step()
+    egos = EgoBook({"e"}, UturnRoad(), goal=goal, goal_tolerance_m=5.0, cruise_speed_mps=10.0, drives=drives,
+                   turn_radius_m=radius)
+    egos.take_over(sim, "e")
+    assert egos.detours == ({"e": (("r", "x", "y"), ("r", "z", "y"))} if detour else {})
+    assert bool(sim.notes) == detour
+    assert sim.routes == ([("e", ("r", "z", "y"))] if detour or (drives and radius and goal is None) else [])
