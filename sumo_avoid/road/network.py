@@ -282,7 +282,6 @@ class Road:
             return plan
         return plan._replace(lanes=kerb_room(plan, self.on_walkway))
 
-
     def without_uturns(self, edge_ids, vclass: str | None):
         """The fastest route round the U-turns of route ``edge_ids``, or None (:mod:`sumo_avoid.road.uturns`)."""
         return without_uturns(self._net, edge_ids, vclass)
