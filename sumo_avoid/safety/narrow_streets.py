@@ -56,12 +56,19 @@ def narrow_stretches(task) -> tuple[NarrowStretch, ...]:
             j += 1
         run = pieces[k:j + 1]
         after = [p for p in pieces[j + 1:] if p.opposite_lane and p.s_start_m < run[-1].s_end_m + ARRIVE_M]
-        # the oncoming lane of a piece runs against it: it starts where the piece ends
-        out.append(NarrowStretch(run[0].s_start_m, run[-1].s_end_m, min(room(p) for p in run),
-                                 tuple((p.opposite_lane, p.s_end_m) for p in run),
-                                 tuple((p.opposite_lane, p.s_end_m) for p in after)))
+        out.append(NarrowStretch(run[0].s_start_m, run[-1].s_end_m, min(room(p) for p in run), _starts(run), _starts(after)))
         k = j + 1
     return tuple(out)
+
+
+def _starts(pieces) -> tuple[tuple[str, float], ...]:
+    """(oncoming lane, s on the path where it starts) of these pieces. The oncoming lane of an edge runs
+    against it and starts where the edge ends: at its last piece's end (where the path blends from one lane
+    to another, an edge has two pieces, the first ending mid-edge)."""
+    end: dict[str, float] = {}
+    for p in pieces:
+        end[p.opposite_lane] = max(end.get(p.opposite_lane, -math.inf), p.s_end_m)
+    return tuple(end.items())
 
 
 def narrow_cap(stretches, s_front_m: float, v_mps: float, width_m: float, snap, lanes: dict, p) -> tuple[float, float]:

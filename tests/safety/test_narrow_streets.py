@@ -65,3 +65,20 @@ def test_the_ego_waits_before_a_narrow_street_for_the_oncoming_car(net, monkeypa
     assert m["goal_reached"] and m["collisions"] == 0 and m["rules_yields"] >= 1 and m["min_gap_m"] > 0.3
     m = _run(net, monkeypatch, rule=False)  # without the rule the two meet on it
     assert m["collisions"] >= 1
+
+
+def test_an_edge_the_path_blends_across_is_one_oncoming_lane_starting_at_its_end():
+    """Hand-made pieces: a 1.6 m edge 'n' (s 0-100, oncoming 1.6 m), a junction, then a two-lane edge 'w'
+    the path blends across in two pieces (s 105-115, 115-200): its oncoming lane starts at s = 200, not at
+    the blend's end."""
+    from types import SimpleNamespace
+
+    from sumo_avoid.road.route import LanePiece
+
+    n = LanePiece(0.0, 100.0, "n", 0, (0.0,), (0.0,), (1.6,), (True,), 1.6, "on_0")
+    j = LanePiece(100.0, 105.0, ":j_0", 0, (0.0,), (0.0,), (3.2,))
+    w1 = LanePiece(105.0, 115.0, "w", 1, (3.2, 0.0), (0.0, -3.2), (3.2, 3.2), (True, True), 3.2, "ow_0")
+    w2 = LanePiece(115.0, 200.0, "w", 1, (0.0, -3.2), (0.0, -3.2), (3.2, 3.2), (True, True), 3.2, "ow_0")
+    (st,) = narrow_stretches(SimpleNamespace(lanes=(n, j, w1, w2), width_m=1.8))
+    assert (st.s_start_m, st.s_end_m, st.room_m) == (0.0, 100.0, 3.2)
+    assert st.inside == (("on_0", 100.0),) and st.beyond == (("ow_0", 200.0),)
