@@ -14,8 +14,7 @@ the trap with a potential below the trap's (it has left the basin), or after ``s
 draws (then no escape this time, and the next search waits ``trap_window_s`` x 2^(failures in a
 row), at most ``sa_backoff_max_s``; a search costs up to ``sa_max_iter`` field evaluations). A car cannot jump to x1, so the walk's end point becomes an
 *escape target*: the ego follows the reference path shifted sideways by the end point's d
-(e.g. the free lane) until it has held that offset for ``escape_hold_s`` or
-``escape_timeout_s`` has passed; then plain APF resumes.
+(e.g. the free lane) until it has held that offset for ``escape_hold_s`` or ``escape_timeout_s`` has passed; then plain APF resumes.
 """
 from __future__ import annotations
 
@@ -107,7 +106,7 @@ class ApfSaController(BaseController):
         self.state: dict[str, _EgoState] = {}
         self.escapes = 0
         self.failed_searches = 0
-        self.passer = OncomingPass(params.passing, params.escape_room_m, params.escape_reverse_speed_mps)
+        self.passer = OncomingPass(params.passing, params.escape_reverse_speed_mps, params.apf.max_lat_speed_mps)
         self.passes = 0
 
     def add_ego(self, task: EgoTask) -> None:
@@ -188,7 +187,7 @@ class ApfSaController(BaseController):
             v = drv.velocity(fld, task.cruise_speed_mps, v_road, float(np.hypot(*sc.vel)),
                              may_reverse=sees_behind and self._clear_behind(sc))
             if st.escape_offset is not None:
-                v = self._make_room(st, sc, v, fld.v_safe, sees_behind)
+                v = self._make_room(st, sc, v, fld.v_safe, sees_behind, view.passing is not None)
             elif st.pass_ready:
                 v = self._wait_to_pass(st, sc, sees_behind)
             out[k] = view.to_xy_velocity(sc.s, sc.d, v, drv.step_s)
@@ -252,7 +251,7 @@ class ApfSaController(BaseController):
             st.history.clear()
             return np.zeros(2)
         room = self._room_ahead(sc, heading=0.0)
-        if room >= max(self.p.escape_room_m, self.driver.lookahead(0.0)) or not (sees_behind and self._clear_behind(sc)):
+        if room >= self.p.passing.pass_room_m or not (sees_behind and self._clear_behind(sc)):
             return np.zeros(2)
         return self._back_up(sc)
 
@@ -262,9 +261,9 @@ class ApfSaController(BaseController):
         s_to = view.passing[1]
         done = sc.s - 0.5 * sc.length > s_to
         if not done and sc.s + 0.5 * sc.length < st.pass_rear_s and abs(sc.d) < ABORT_D_M:
-            t_pass = self.passer.time_to(s_to - sc.s, float(np.hypot(*sc.vel)), task.cruise_speed_mps)
-            reach = s_to - sc.s + self.p.passing.pass_oncoming_mps * (t_pass + self.p.passing.pass_margin_s)
-            done = not self.passer.clear(self._oncoming(view, obs, row, sc)(view.passing[0], sc.s + reach), s_to, t_pass)
+            s_end, t_pass = self.passer.need(view, sc, s_to, task.cruise_speed_mps)
+            reach = s_end - sc.s + self.p.passing.pass_oncoming_mps * (t_pass + self.p.passing.pass_margin_s)
+            done = not self.passer.clear(self._oncoming(view, obs, row, sc)(view.passing[0], sc.s + reach), s_end, t_pass)
         if done:
             view.passing = None
             st.escape_offset, st.held_since_s, st.reversing = None, None, False
@@ -295,15 +294,16 @@ class ApfSaController(BaseController):
                 return o
         return 0.0
 
-    def _make_room(self, st: _EgoState, sc: FrenetScene, v_des, v_safe: float, sees_behind: bool):
+    def _make_room(self, st: _EgoState, sc: FrenetScene, v_des, v_safe: float, sees_behind: bool, passing: bool):
         """A car cannot step sideways: when the escape is blocked straight ahead (the governor allows
-        no speed) it backs up until ``escape_room_m`` is free on the line towards the escape
-        target, then drives the escape forward. Needs ``actuator.max_reverse_speed_mps > 0``."""
+        no speed) it backs up until ``escape_room_m`` (at least the carrot's distance; a pass:
+        ``pass_room_m``, its carrot is nearer) is free on the line towards the escape target, then
+        drives the escape forward. Needs ``actuator.max_reverse_speed_mps > 0``."""
         if not st.reversing and v_safe < 0.5 and float(np.hypot(*sc.vel)) < 0.3:
             st.reversing = True
         if st.reversing:
             room = self._room_ahead(sc, heading=0.0)
-            if room >= max(self.p.escape_room_m, self.driver.lookahead(0.0)):
+            if room >= (self.p.passing.pass_room_m if passing else max(self.p.escape_room_m, self.driver.lookahead(0.0))):
                 st.reversing = False
                 return v_des
             if not (sees_behind and self._clear_behind(sc)):  # never back into traffic, nor blind

@@ -11,20 +11,28 @@ a lane its class may use) for a pass, as a driver does, when all of this holds:
 * it is no queue: nothing else stands in the ego's strip within ``pass_queue_gap_m`` beyond it, and no
   junction's stop line of the route lies within that distance of its front (a car waiting at a light
   or a junction is not passed);
-* the oncoming lane is there for the whole pass, from a car length and ``escape_room_m`` (the room it
+* the oncoming lane is there for the whole pass, from a car length and ``pass_room_m`` (the room it
   backs up to) behind the ego to
   ``pass_return_m`` beyond the blocker's front (SUMO's nets: the edge running the other way between the
   same junctions; no junction inside the stretch);
-* the oncoming lane is free for the pass: every vehicle the ego senses in it ahead reaches the end of
-  the stretch no sooner than the time the ego needs to drive to it (speeding up at ``pass_accel_mps2``
-  to its cruise speed) plus ``pass_margin_s``, and the ego sees far enough for a car at
-  ``pass_oncoming_mps`` it cannot see yet (a radar sees ``max_range_m``, ground truth everything).
+* the oncoming lane is free for the pass: every vehicle the ego senses in it ahead or beside it (behind
+  its rear too when it must back up first) reaches the point where the ego is back in its own lane
+  no sooner than the time the ego needs to drive there plus ``pass_margin_s`` (:meth:`OncomingPass.need`:
+  speeding up at ``pass_accel_mps2`` to its cruise speed until its rear is past the stretch, then back
+  across, its left side over the centre line, at the field's ``max_lat_speed_mps``), and the ego sees far
+  enough for a car at ``pass_oncoming_mps`` it cannot see yet (a radar sees ``max_range_m``, ground truth
+  everything). ``pass_accel_mps2`` is the ego's own, a little low: from standing 8 m behind the van of
+  van_bike_lane APF-SA is back in its lane 7.0-7.1 s and 45-49 m later on every seed that passes, which
+  :meth:`OncomingPass.need` puts at 7.1 s and 50.5 m. Until 2026-11-28 the check ended at the stretch's end,
+  15-20 m short of that point, and assumed 1.5 m/s^2: oncoming cars passed the point 3.8 s after the ego at
+  the least (seeds 3, 4, 7, 8), and 2.0 m/s^2 alone brought that to 0.3 s; now 6.8 s at the least (seeds 1-10).
 
 While all of this but a free oncoming lane holds (:meth:`OncomingPass.candidate`), an ego that sees
 behind it (ground truth or a rear radar) makes its room first: it backs up in its lane until
-``escape_room_m`` (at least the carrot's distance) is free ahead and stands there (``ApfSaController.
-_wait_to_pass``), so the pass, once the lane is free, needs only its own time, not the back-up's too
-(about 9 s less of free oncoming lane: van_bike_lane with ground truth, 7 of 10 seeds pass instead of 4);
+``pass_room_m`` is free ahead and stands there (``ApfSaController._wait_to_pass``), so the pass, once the
+lane is free, needs only its own time, not the back-up's too (about 9 s less of free oncoming lane:
+van_bike_lane with ground truth, 7 of 10 seeds pass instead of 4; 8 m rather than the escapes' 15 m: 7 m
+less to drive in the oncoming lane);
 it drives on as before once nothing stands ahead any more.
 
 While it passes, the oncoming lane belongs to its corridor (``RoadView.passing``), so the escape search
@@ -50,6 +58,7 @@ from sumo_avoid.core.geometry import footprint_corners
 STAND_MPS = 0.5  # a blocker slower than this stands, m/s
 ABORT_D_M = 0.5  # a pass is called off only while the ego's centre is this close to its lane's centre, m
 PASS_CARROT_MIN_M = 5.0  # moving out behind the blocker, the carrot lies at least this far ahead, m
+BEHIND_M = 3.0  # an oncoming car's centre this far behind the ego's rear is past it (no back-up), m
 RADAR_SIGHT_M = 100.0  # how far a radar-driven ego sees the oncoming lane (the radar's default range), m
 
 
@@ -63,8 +72,9 @@ class PassParams:
     pass_look_m: float = field_doc(25.0, doc="... when it stands this close ahead, m")
     pass_queue_gap_m: float = field_doc(15.0, doc="... and nothing stands, nor is a stop line, within this of "
                                                   "its front (no queue), m")
+    pass_room_m: float = field_doc(8.0, doc="waiting to pass, the ego stands (backs up to) this far behind it, m")
     pass_return_m: float = field_doc(8.0, doc="the pass ends this far beyond the blocker's front plus a car length, m")
-    pass_accel_mps2: float = field_doc(1.5, positive=True, doc="the ego's speed-up assumed for the pass, m/s^2")
+    pass_accel_mps2: float = field_doc(2.0, positive=True, doc="the ego's speed-up assumed for the pass, m/s^2")
     pass_margin_s: float = field_doc(3.0, doc="oncoming vehicles reach the pass's end at least this long after "
                                               "the ego, s")
     pass_oncoming_mps: float = field_doc(16.7, doc="speed assumed for an oncoming vehicle the ego cannot see yet, m/s")
@@ -74,11 +84,12 @@ class OncomingPass:
     """Decides, per ego, when APF-SA borrows the oncoming lane (module doc); holds no state but the
     blocker's first sighting per ego."""
 
-    def __init__(self, params: PassParams, escape_room_m: float = 12.0, reverse_speed_mps: float = 1.5):
-        """``escape_room_m``, ``reverse_speed_mps``: how far and how fast APF-SA backs up before it
-        drives round a blocker it stands close behind."""
+    def __init__(self, params: PassParams, reverse_speed_mps: float = 1.5, lat_speed_mps: float = 1.5):
+        """``reverse_speed_mps``: how fast APF-SA backs up (to ``pass_room_m``) before it drives round a
+        blocker it stands close behind; ``lat_speed_mps``: its speed across the road at most (the way
+        back into its lane)."""
         self.p = params
-        self.room_m, self.reverse_mps = escape_room_m, reverse_speed_mps
+        self.reverse_mps, self.lat_mps = reverse_speed_mps, lat_speed_mps
         self._behind: dict[str, tuple[float, float]] = {}  # vid -> (time first held, blocker's rear s)
 
     def forget(self, vid: str) -> None:
@@ -124,7 +135,7 @@ class OncomingPass:
         if any(b[1] - 1.0 <= lk.s_stop_m <= b[1] + p.pass_queue_gap_m for lk in task.links):
             return None  # it waits at a junction
         # from behind the room the ego backs up to when it stands close behind the blocker (apf_sa._make_room)
-        s_from, s_to = sc.s - sc.length - self.room_m, b[1] + sc.length + p.pass_return_m
+        s_from, s_to = sc.s - sc.length - p.pass_room_m, b[1] + sc.length + p.pass_return_m
         if float(view.lanes.opposite(np.linspace(s_from, s_to, 24)).min()) <= 0.0:
             return None
         return b[0], b[1], s_from, s_to
@@ -137,16 +148,29 @@ class OncomingPass:
         if c is None:
             return None
         b, (s_from, s_to) = c[:2], c[2:]
-        # standing close behind it the ego first backs up to escape_room_m (apf_sa._make_room)
-        back = max(self.room_m - (b[0] - sc.s - 0.5 * sc.length), 0.0)
-        t_pass = (back / self.reverse_mps + 2.0 if back > 0 else 0.0) + \
-            self.time_to(s_to - sc.s + back, float(np.hypot(*sc.vel)), cruise_mps)
-        reach = s_to - sc.s + p.pass_oncoming_mps * (t_pass + p.pass_margin_s)
+        # standing close behind it the ego first backs up to pass_room_m (apf_sa._make_room)
+        back = max(p.pass_room_m - (b[0] - sc.s - 0.5 * sc.length), 0.0)
+        s_end, t_pass = self.need(view, sc, s_to, cruise_mps, back)
+        reach = s_end - sc.s + p.pass_oncoming_mps * (t_pass + p.pass_margin_s)
         if reach > sight_m:
             return None  # the lane may hold a car it cannot see yet
-        if not self.clear(oncoming(s_from, sc.s + reach), s_to, t_pass):
+        # a car past the ego's rear drives away from it; one backing up meets those behind it too
+        s_look = s_from if back > 0 else sc.s - 0.5 * sc.length - BEHIND_M
+        if not self.clear(oncoming(s_look, sc.s + reach), s_end, t_pass):
             return None
         return s_from, s_to, b[0]
+
+    def need(self, view, sc, s_to: float, cruise_mps: float, back_m: float = 0.0) -> tuple[float, float]:
+        """(s_end, t): where the ego's centre is when it is back in its own lane (its left side over the
+        centre line; the pass ends with its rear past ``s_to``, then it moves back across at
+        ``lat_speed_mps``) and the time it needs to get there (backing up ``back_m`` first)."""
+        v = float(np.hypot(*sc.vel))
+        a = self.p.pass_accel_mps2
+        v_end = min(max(cruise_mps, v), math.sqrt(v * v + 2.0 * a * max(s_to - sc.s + back_m, 0.0)))
+        shift = 0.5 * (float(view.lanes.opposite([s_to])[0]) + sc.width)
+        s_end = s_to + 0.5 * sc.length + v_end * shift / self.lat_mps
+        t = (back_m / self.reverse_mps + 2.0 if back_m > 0 else 0.0) + self.time_to(s_end - sc.s + back_m, v, cruise_mps)
+        return s_end, t
 
     def time_to(self, dist_m: float, v_mps: float, cruise_mps: float) -> float:
         """Time to drive ``dist_m`` from ``v_mps`` speeding up at ``pass_accel_mps2`` to ``cruise_mps``."""
