@@ -44,6 +44,8 @@ class EgoBook:
         info = sim.take_over(vid, drive=self.drives)
         edges = self._round_uturns(sim, vid, info)
         path, links, limits, lanes = self.road.route(edges, depart_lane=info.lane_index, vclass=info.vclass)
+        if not self.follow_routes:  # an arena: the net is only a canvas, its junctions and limits are no rules
+            links, limits = (), None
         goal = self._goal_point(vid, edges, path, links)
         if not self.drives and self._goal_is_route_end(vid, edges):
             self._route_end.add(vid)

@@ -121,3 +121,14 @@ def test_relaxation_step_adds_the_velocity_kick_before_moving():
     np.testing.assert_allclose(vel, [[2.0, 1.0]])
     np.testing.assert_allclose(pos, [[0.4, 0.2]])
     assert head[0] == pytest.approx(math.atan2(1.0, 2.0)) and speed[0] == pytest.approx(math.sqrt(5.0))
+
+
+def test_the_arena_net_is_a_canvas_its_junctions_are_no_rules():
+    """A flock member placed on an edge of nets/arena.net.xml whose route runs into one of its junctions got
+    that junction's link, and the rules layer made it give way there to another member (seed 1, N = 100:
+    f21 to f41 at n11, 6.8 s; ``yield_crossings`` listed it): in an arena the egos drive free, so their
+    tasks carry no junction links and no lane speed limits."""
+    res, m = _run("arena_v4.toml", "arena.n_agents=100", "sim.duration_s=10", seed=1)
+    assert len(res.tasks) == 100
+    assert all(t.links == () and t.speed_limits is None for t in res.tasks.values())
+    assert m["rules_yields"] == 0 and m["yield_crossings"] == [] and m["yield_violations"] == 0
