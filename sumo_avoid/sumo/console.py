@@ -105,3 +105,10 @@ def leftover(console_file: pathlib.Path, log_file: pathlib.Path) -> list[str]:
     except OSError:
         return []
     return [line for line in text.splitlines() if line.strip() and line not in logged]
+
+
+def start_error(first: str, libsumo_says: str) -> str:
+    """Why SUMO would not start: its first error line, and libsumo's message where that says more."""
+    if not first or libsumo_says in (first, "", "Process Error"):
+        return first or libsumo_says
+    return f"{first}; {libsumo_says}"

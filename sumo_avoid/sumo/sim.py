@@ -24,7 +24,7 @@ import numpy as np
 
 from sumo_avoid.core.snapshot import Snapshot
 from sumo_avoid.core.types import EgoTask
-from sumo_avoid.sumo.console import first_error, native_stderr_kept
+from sumo_avoid.sumo.console import first_error, native_stderr_kept, start_error
 from sumo_avoid.sumo.inputs import FLOCK_MAX_SPEED_MPS
 from sumo_avoid.sumo.placement import RoutePlacement
 from sumo_avoid.sumo.ssm_device import SsmRequest, equip, ssm_args
@@ -94,13 +94,6 @@ def sumo_args(net: pathlib.Path, routes, additional, step_s: float, seed: int, l
     return args
 
 
-def start_error(first: str, libsumo_says: str) -> str:
-    """Why SUMO would not start: its first error line, and libsumo's message where that says more."""
-    if not first or libsumo_says in (first, "", "Process Error"):
-        return first or libsumo_says
-    return f"{first}; {libsumo_says}"
-
-
 class SumoStartError(RuntimeError):
     """SUMO refused to load the network, routes or additional files."""
 
@@ -131,6 +124,7 @@ class SumoSim:
         self._dims: dict[str, tuple[float, float]] = {}  # id -> (length, width), static
         self._vclass: dict[str, str] = {}  # vehicle id -> SUMO vehicle class, static
         self._persons: dict[str, tuple[float, float]] = {}  # person id -> (length, width), static
+        self._no_pose: set[str] = set()  # road users SUMO gave a non-finite position (noted once, _finite)
         self._egos: set[str] = set()
         self._applied: dict[str, float] = {}  # ego -> the signed speed it was last moved at (see read)
         self._routes: dict[str, tuple[str, ...]] = {}  # ego -> its route as SUMO gave it at take-over
@@ -179,6 +173,12 @@ class SumoSim:
         flat = np.fromiter(itertools.chain.from_iterable((*r[P], *_NO_Z[len(r[P])], r[A], r[S], r[LP]) for r in rows),
                            float, 6 * n)
         flat = flat.reshape(n, 6)  # front bumper x, y, z, compass angle (deg), speed, lane position
+        keep = self._finite(flat, ids, is_ego)
+        if keep is not None:
+            rows = [r for r, k in zip(rows, keep) if k]
+            ids, dims, is_ego, vclass = (tuple(itertools.compress(ids, keep)), dims[keep], is_ego[keep],
+                                         tuple(itertools.compress(vclass, keep)))
+            flat, n = flat[keep], int(keep.sum())
         z, flat = flat[:, 2], flat[:, [0, 1, 3, 4, 5]]
         lane = tuple(r[c.VAR_LANE_ID] for r in rows)
         heading = np.radians(90.0 - flat[:, 2])
@@ -218,6 +218,11 @@ class SumoSim:
         flat = np.fromiter(itertools.chain.from_iterable((*r[P], *_NO_Z[len(r[P])], r[c.VAR_ANGLE], r[c.VAR_SPEED],
                                                           r[c.VAR_LANEPOSITION]) for _, r in rows), float, 6 * m)
         flat = flat.reshape(m, 6)
+        keep = self._finite(flat, [pid for pid, _ in rows], np.zeros(m, bool))
+        if keep is not None:
+            rows, flat, m = list(itertools.compress(rows, keep)), flat[keep], int(keep.sum())
+            if not m:
+                return None
         z, flat = flat[:, 2], flat[:, [0, 1, 3, 4, 5]]
         p_ids = tuple(pid for pid, _ in rows)
         dims = np.array([self._persons[pid] for pid in p_ids], float).reshape(m, 2)
@@ -226,6 +231,20 @@ class SumoSim:
         lane = tuple(r[c.VAR_LANE_ID] for _, r in rows)
         return (p_ids, flat[:, :2] - direction * (dims[:, :1] / 2.0), direction * flat[:, 3:4], heading, dims, lane,
                 np.where([bool(x) for x in lane], flat[:, 4], np.nan), z)
+
+    def _finite(self, flat, ids, is_ego) -> np.ndarray | None:
+        """None when every row of ``flat`` (x, y, z, angle, ...) has a finite position and angle, else which
+        to keep: SUMO gave a person on a walking area a NaN position for a step (unseen Sao Paulo district,
+        striping model); such a road user is left out of that step's snapshot, noted once in SUMO's log (an
+        ego is kept: its pose is the plug-in's own)."""
+        ok = np.isfinite(flat[:, [0, 1, 3]]).all(axis=1) | is_ego
+        if ok.all():
+            return None
+        for vid in itertools.compress(ids, ~ok):
+            if vid not in self._no_pose:
+                self._no_pose.add(vid)
+                self.note(f"sumo_avoid: {vid} has no finite position at {self.time_s:.2f} s; left out of the steps where SUMO gives none")
+        return ok
 
     @staticmethod
     def _signals() -> dict[str, str]:

@@ -65,3 +65,40 @@ def test_an_ego_released_at_its_goal_is_gone_and_the_others_step_on():
         for _ in range(3):
             sim.step()
         assert sim.read().ids == ("ego",)
+
+
+def test_a_road_user_sumo_gives_no_finite_position_is_left_out_of_that_step(monkeypatch):
+    """SUMO gave a person on a walking area a NaN position for one step (an unseen Sao Paulo district with
+    randomTrips people: the run crashed in the recorder's neighbour search). The snapshot leaves such a
+    person or vehicle out of that step, notes it once, and keeps every other road user as SUMO gave it."""
+    import libsumo
+
+    args = sumo_args(SCENARIOS / "streets" / "zebra.net.xml", [SCENARIOS / "streets" / "zebra.rou.xml"], [], 0.1, 1,
+                     0.8, None)
+    with SumoSim(args) as sim:
+        for _ in range(300):
+            sim.step()
+        before = sim.read()
+        people = [v for v, p in zip(before.ids, before.is_person) if p]
+        cars = [v for v, p in zip(before.ids, before.is_person) if not p]
+        assert len(people) >= 2 and len(cars) >= 2
+        c = libsumo.constants
+        real_p, real_v = libsumo.person.getAllSubscriptionResults, libsumo.vehicle.getAllSubscriptionResults
+
+        def nan_pose(real, who):
+            def results():
+                res = {k: dict(v) for k, v in real().items()}
+                res[who][c.VAR_POSITION3D] = (math.nan, math.nan, 0.0)
+                res[who][c.VAR_ANGLE] = math.nan
+                return res
+            return results
+
+        monkeypatch.setattr(libsumo.person, "getAllSubscriptionResults", nan_pose(real_p, people[0]))
+        monkeypatch.setattr(libsumo.vehicle, "getAllSubscriptionResults", nan_pose(real_v, cars[0]))
+        snap = sim.read()
+        assert people[0] not in snap.ids and cars[0] not in snap.ids
+        assert set(snap.ids) == set(before.ids) - {people[0], cars[0]}
+        assert np.isfinite(snap.pos).all() and np.isfinite(snap.heading).all()
+        for k, v in enumerate(snap.ids):  # the others as SUMO gives them
+            assert snap.pos[k] == pytest.approx(before.pos[before.index[v]])
+        assert sim._no_pose == {people[0], cars[0]}
