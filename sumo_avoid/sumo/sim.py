@@ -218,7 +218,7 @@ class SumoSim:
         flat = np.fromiter(itertools.chain.from_iterable((*r[P], *_NO_Z[len(r[P])], r[c.VAR_ANGLE], r[c.VAR_SPEED],
                                                           r[c.VAR_LANEPOSITION]) for _, r in rows), float, 6 * m)
         flat = flat.reshape(m, 6)
-        keep = self._finite(flat, [pid for pid, _ in rows], np.zeros(m, bool))
+        keep = self._finite(flat, (pid for pid, _ in rows))
         if keep is not None:
             rows, flat, m = list(itertools.compress(rows, keep)), flat[keep], int(keep.sum())
             if not m:
@@ -232,18 +232,18 @@ class SumoSim:
         return (p_ids, flat[:, :2] - direction * (dims[:, :1] / 2.0), direction * flat[:, 3:4], heading, dims, lane,
                 np.where([bool(x) for x in lane], flat[:, 4], np.nan), z)
 
-    def _finite(self, flat, ids, is_ego) -> np.ndarray | None:
+    def _finite(self, flat, ids, is_ego=False) -> np.ndarray | None:
         """None when every row of ``flat`` (x, y, z, angle, ...) has a finite position and angle, else which
         to keep: SUMO gave a person on a walking area a NaN position for a step (unseen Sao Paulo district,
         striping model); such a road user is left out of that step's snapshot, noted once in SUMO's log (an
-        ego is kept: its pose is the plug-in's own)."""
+        ego is kept: its pose is the plug-in's own). ``ids`` is read only then."""
         ok = np.isfinite(flat[:, [0, 1, 3]]).all(axis=1) | is_ego
         if ok.all():
             return None
         for vid in itertools.compress(ids, ~ok):
             if vid not in self._no_pose:
                 self._no_pose.add(vid)
-                self.note(f"sumo_avoid: {vid} has no finite position at {self.time_s:.2f} s; left out of the steps where SUMO gives none")
+                self.note(f"sumo-avoid: {vid} has no finite position at {self.time_s:.2f} s; left out of the steps where SUMO gives none")
         return ok
 
     @staticmethod
