@@ -72,10 +72,18 @@ class FrenetScene:
     corridor: Callable  # s (N,) -> (d_lo (N,), d_hi (N,)): bounds of the ego's lanes, m
     o_grow: np.ndarray | None = None  # (O,) how much each one's length and width grew by its VRU margin, m (None: 0)
     one_sided_m: float = 0.0  # of the corridor's width at s, the junction widening that lies on one side only, m
+    o_kerb: np.ndarray | None = None  # (O,) bool: a person on a walkway, behind the kerb (None: none)
 
     @property
     def q(self) -> np.ndarray:
         return np.array([self.s, self.d])
+
+    @property
+    def kerb_only(self) -> np.ndarray:
+        """(O,) bool: people on a walkway who keep no VRU margin (standing, or walking along the kerb)."""
+        if self.o_kerb is None or not len(self.o_kerb):
+            return np.zeros(len(self.o_pos), bool)
+        return self.o_kerb & ((self.o_grow if self.o_grow is not None else np.zeros(len(self.o_pos))) <= 0.0)
 
 
 class RoadView:
@@ -243,12 +251,12 @@ class RoadView:
         v_s, v_d = self.frame.velocity_to_frenet(s, d_raw, snap.vel[row][None, :])
         _, h_rel, vel = self._from_line(np.array([s]), d_raw, np.array([wrap_angle(snap.heading[row] - h_path)]),
                                         np.array([[v_s[0], v_d[0]]]))
-        o_pos, o_hd, o_len, o_wid, o_vel, vru = obstacle_vehicles(obs, row, q, sense_radius_m, self.walkways)
+        o_pos, o_hd, o_len, o_wid, o_vel, vru, kerb = obstacle_vehicles(obs, row, q, sense_radius_m, self.walkways)
         if len(o_pos):
             os_, od = self.frame.to_frenet(o_pos, np.full(len(o_pos), s), sense_radius_m)
             keep = np.isfinite(os_) & (np.abs(od) < MAX_ABS_D_M) & (np.abs(os_ - s) < sense_radius_m)
             os_, od = os_[keep], od[keep]
-            o_hd, o_len, o_wid, o_vel, vru = o_hd[keep], o_len[keep], o_wid[keep], o_vel[keep], vru[keep]
+            o_hd, o_len, o_wid, o_vel, vru, kerb = o_hd[keep], o_len[keep], o_wid[keep], o_vel[keep], vru[keep], kerb[keep]
             o_rel = wrap_angle(o_hd - self.frame.heading_at(os_))
             # a vehicle wholly outside the ego's lanes (oncoming traffic beyond the centre line,
             # a car on a road nearby) is behind a bound the ego keeps to: not an obstacle to it; on a
@@ -261,6 +269,7 @@ class RoadView:
             lo, hi = np.minimum(lo, line_lo + off), np.maximum(hi, line_hi + off)
             keep = (od + half > lo - OUTSIDE_MARGIN_M) & (od - half < hi + OUTSIDE_MARGIN_M)
             os_, od, o_rel, o_len, o_wid, o_vel = os_[keep], od[keep], o_rel[keep], o_len[keep], o_wid[keep], o_vel[keep]
+            kerb = kerb[keep]
             # a person or cyclist in or at the ego's lanes counts as grown by vru_margin_m all round (one
             # on the sidewalk beside them is behind the bound, as above: the ego passes it, not crawls), a
             # person on a walkway by its share of it (perception._weight) while it walks towards the ego's
@@ -276,7 +285,8 @@ class RoadView:
         return FrenetScene(s, d, float(h_rel[0]), vel[0],
                            float(snap.length[row]), float(snap.width[row]),
                            o_pos.reshape(-1, 2), o_rel, o_len, o_wid, o_vel.reshape(-1, 2), self.corridor,
-                           grow if len(o_pos) else np.zeros(0), self.one_sided_widening(s))
+                           grow if len(o_pos) else np.zeros(0), self.one_sided_widening(s),
+                           kerb if len(o_pos) else np.zeros(0, bool))
 
     def to_xy_velocity(self, s: float, d: float, v_frenet, lead_s: float = 0.0) -> np.ndarray:
         """(2,) world velocity of a Frenet command (s_dot, d_dot), with the command's magnitude (the

@@ -88,7 +88,7 @@ def perceived_obstacles(det, vid: str, length_m: float = ASSUMED_LENGTH_M, width
 
 
 def obstacle_vehicles(obs, row: int, q, radius_m: float, walkways=frozenset()):
-    """Other road users for the ego at snapshot ``row`` as (pos, heading, length, width, vel, vru):
+    """Other road users for the ego at snapshot ``row`` as (pos, heading, length, width, vel, vru, kerb):
     from the radar when ``obs.detections`` is set (moving along ``obs.route_heading`` of that ego
     if given, see :func:`perceived_boxes`), else ground truth within ``radius_m`` of q. ``vru``
     (float, :func:`_weight`) is the share of the controller's VRU margin each one gets: 1 for a person
@@ -96,7 +96,8 @@ def obstacle_vehicles(obs, row: int, q, radius_m: float, walkways=frozenset()):
     of the return) on the carriageway; a person on one of the ``walkways`` (lane ids: sidewalks, walking
     areas) is off it: half walking, none standing (a car passes the people waiting at a corner at their
     size; SUMO puts them at the kerb's edge, inside a tight turn's margin); a radar return is placed on
-    the map by the sensor (``Detections.walkway``) and judged the same way. Road users on another level
+    the map by the sensor (``Detections.walkway``) and judged the same way. ``kerb`` (bool) marks the people on
+    a walkway (behind the kerb, off the carriageway). Road users on another level
     than the ego (:mod:`sumo_avoid.core.levels`: a car on a bridge over it) are left out."""
     snap = obs.snapshot
     if obs.detections is not None:  # one scan per radar mount (front, rear)
@@ -111,7 +112,7 @@ def obstacle_vehicles(obs, row: int, q, radius_m: float, walkways=frozenset()):
     vru = snap.is_person[o] | np.array([snap.vclass[i] in VRU_CLASSES for i in o], bool).reshape(len(o))
     kerb = np.array([snap.is_person[i] and snap.lane[i] in walkways for i in o], bool).reshape(len(o)) \
         if walkways and vru.any() else np.zeros(len(o), bool)
-    return snap.pos[o], snap.heading[o], snap.length[o], snap.width[o], snap.vel[o], _weight(vru, kerb, snap.vel[o])
+    return snap.pos[o], snap.heading[o], snap.length[o], snap.width[o], snap.vel[o], _weight(vru, kerb, snap.vel[o]), kerb
 
 
 def _weight(vru, kerb, vel) -> np.ndarray:
@@ -134,7 +135,7 @@ def towards_path(share, closing_mps) -> np.ndarray:
 
 def _obstacles_of(det, vid: str, along):
     """One scan's returns of ego ``vid`` as boxes (a car's; a labelled person's or cyclist's
-    :data:`VRU_LENGTH_M` x :data:`VRU_WIDTH_M`) and their VRU marks (not on a walkway)."""
+    :data:`VRU_LENGTH_M` x :data:`VRU_WIDTH_M`), their VRU marks (not on a walkway) and walkway marks."""
     k = det.of(vid)
     pos, hd, ln, wd, vel = perceived_boxes(det, k, along)
     small = det.vru_mask()[k]
@@ -145,7 +146,7 @@ def _obstacles_of(det, vid: str, along):
         w = np.flatnonzero(small & kerb)
         if len(w):  # a person at the kerb seen far off the traffic's direction: its motion is not known
             vel[w[~observable(det, k[w], along)]] = 0.0
-    return pos, hd, ln, wd, vel, _weight(small, kerb, vel)
+    return pos, hd, ln, wd, vel, _weight(small, kerb, vel), small & kerb
 
 
 def observable(det, k, along=None, min_cos: float = KERB_MIN_COS) -> np.ndarray:

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from sumo_avoid.control.apf.apf import attraction, repulsion
+from sumo_avoid.control.apf.potential import attraction, repulsion
 
 
 def test_attraction_quadratic_inside_d():

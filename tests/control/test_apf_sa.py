@@ -110,7 +110,7 @@ def test_the_field_keys_sit_in_the_apf_sa_table_itself_and_reach_its_driver():
     p = build(ApfSaParams, {"k_rep": 5.0, "sa_t0": 3.0}, "s.toml", "controllers.apf_sa")
     assert p.apf == ApfParams(k_rep=5.0) and p.sa_t0 == 3.0
     assert ApfSaController(p, Context(seed=1, step_s=0.1)).driver.p is p.apf
-    with pytest.raises(ScenarioError, match=r"'controllers.apf_sa.apf': expected one of the known keys \['curve_decel"):
+    with pytest.raises(ScenarioError, match=r"'controllers.apf_sa.apf': expected one of the known keys \['creep_align_mps', 'curve_decel"):
         build(ApfSaParams, {"apf": {}}, "s.toml", "controllers.apf_sa")
     with pytest.raises(ScenarioError, match=r"'controllers.apf_sa.k_rep': expected a non-negative number"):
         build(ApfSaParams, {"k_rep": -1.0}, "s.toml", "controllers.apf_sa")

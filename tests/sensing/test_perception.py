@@ -22,14 +22,14 @@ def test_people_on_sidewalks_and_walking_areas_are_off_the_carriageway():
                  is_person=np.array([False, True, True, True, False, False]),
                  lane=("E_1", ":J_c0_0", "E_0", ":J_w1_0", "E_bike", "E_1"))
     obs = SimpleNamespace(snapshot=s, detections=None)
-    *_, vru = obstacle_vehicles(obs, 0, pos[0], 50.0, walkways=frozenset({"E_0", ":J_w1_0"}))
+    *_, vru, _ = obstacle_vehicles(obs, 0, pos[0], 50.0, walkways=frozenset({"E_0", ":J_w1_0"}))
     assert vru.tolist() == [1.0, 0.0, 0.0, 1.0, 0.0]  # all stand: the ones on walkways get no margin
     walking = Snapshot(0.0, ids, pos, np.tile([0.0, 1.2], (n, 1)), np.zeros(n), np.full(n, 4.5), np.full(n, 1.8),
                        [True] + [False] * (n - 1), vclass=s.vclass, is_person=s.is_person, lane=s.lane)
-    *_, vru = obstacle_vehicles(SimpleNamespace(snapshot=walking, detections=None), 0, pos[0], 50.0,
+    *_, vru, _ = obstacle_vehicles(SimpleNamespace(snapshot=walking, detections=None), 0, pos[0], 50.0,
                                 walkways=frozenset({"E_0", ":J_w1_0"}))
     assert vru.tolist() == [1.0, 0.5, 0.5, 1.0, 0.0]  # walking there: half the margin
-    *_, vru = obstacle_vehicles(obs, 0, pos[0], 50.0)  # no walkways known: every person and cyclist
+    *_, vru, _ = obstacle_vehicles(obs, 0, pos[0], 50.0)  # no walkways known: every person and cyclist
     assert vru.tolist() == [1.0, 1.0, 1.0, 1.0, 0.0]
 
 
@@ -60,6 +60,6 @@ def test_a_person_at_the_kerb_far_off_the_traffic_direction_is_taken_to_stand():
     assert observable(det, np.arange(2), 0.0).tolist() == [False, True]  # cos 70 < 0.5 <= cos 40
     obs = SimpleNamespace(snapshot=SimpleNamespace(ids=("ego",)), detections=(det,), route_heading=np.array([0.0]),
                           index=lambda v: 0)
-    *_, vel, share = obstacle_vehicles(obs, 0, np.zeros(2), 50.0)
+    *_, vel, share, _ = obstacle_vehicles(obs, 0, np.zeros(2), 50.0)
     assert vel[0].tolist() == [0.0, 0.0] and share[0] == 0.0  # taken to stand at the kerb: its size
     assert vel[1] == pytest.approx([-1.2, 0.0]) and share[1] == 0.5  # walking, read along the road

@@ -41,6 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sumo_avoid.actuation.kinematic import REVERSE_BELOW_MPS, STOP_WISH_MPS
+from sumo_avoid.control.apf.potential import attraction, repulsion, unit_and_norm
 from sumo_avoid.control.base_controller import BaseController
 from sumo_avoid.control.road_view import FrenetScene, RoadView
 from sumo_avoid.core.config import field_doc
@@ -84,6 +85,8 @@ class ApfParams:
                                            "blocks the strip instead, m/s")
     squeeze_clear_m: float = field_doc(0.1, doc="lateral clearance the ego must be able to reach to pass it, m")
     max_course_deg: float = field_doc(35.0, doc="moving forward, the commanded direction stays within this angle of the road's, deg")
+    creep_align_mps: float = field_doc(1.0, doc="moving forward slower than this, the commanded direction turns towards the "
+                                                "road's (along it below 0.3 of this), m/s")
     max_lat_speed_mps: float = field_doc(1.5, doc="moving forward, the commanded speed across the road stays below this, m/s")
     curve_lat_accel_mps2: float = field_doc(2.5, doc="speed for the road ahead: lateral acceleration in bends, m/s^2")
     curve_decel_mps2: float = field_doc(3.0, doc="speed for the road ahead: braking before a bend, m/s^2")
@@ -96,32 +99,6 @@ class Field:
     U: np.ndarray  # (C,)
     F: np.ndarray  # (C, 2)
     v_safe: float  # m/s, for the first candidate (the ego's real position)
-
-
-def attraction(q, target, k_att, d):
-    """SPEC §2 capped attraction at points q (C,2): returns U (C,), F (C,2)."""
-    diff = np.asarray(q, float) - np.asarray(target, float)
-    rho = np.hypot(diff[:, 0], diff[:, 1])
-    near = rho <= d
-    U = np.where(near, 0.5 * k_att * rho**2, d * k_att * rho - 0.5 * k_att * d**2)
-    scale = np.where(near, k_att, d * k_att / np.maximum(rho, 1e-12))
-    return U, -scale[:, None] * diff
-
-
-def repulsion(rho, direction, rho0, k_rep, rho_floor=0.2):
-    """SPEC §2 repulsion for M obstacle distances rho (M,), unit directions (M,2) away from the
-    obstacle, influence distances rho0 (M,): returns U (M,), F (M,2)."""
-    r = np.maximum(np.asarray(rho, float), rho_floor)
-    inside = r < rho0
-    diff = np.where(inside, 1.0 / r - 1.0 / rho0, 0.0)
-    U = 0.5 * k_rep * diff**2
-    F = (k_rep * diff / r**2)[:, None] * direction
-    return U, F
-
-
-def _unit(v):
-    n = np.hypot(v[..., 0], v[..., 1])
-    return v / np.maximum(n, 1e-12)[..., None], n
 
 
 class ApfDriver:
@@ -177,8 +154,8 @@ class ApfDriver:
             P = np.repeat(ego_corners, O, axis=0)
             Q = np.tile(oc, (C, 1, 1))
             rho, p_ego, p_obs = convex_distance(P, Q)
-            centre_dir, _ = _unit(np.repeat(q_cand, O, axis=0) - np.tile(sc.o_pos, (C, 1)))
-            away, n = _unit(p_ego - p_obs)
+            centre_dir, _ = unit_and_norm(np.repeat(q_cand, O, axis=0) - np.tile(sc.o_pos, (C, 1)))
+            away, n = unit_and_norm(p_ego - p_obs)
             away = np.where((n > 1e-6)[:, None], away, centre_dir)
             towards = -away
             cos_phi = np.maximum(towards @ hd, 0.0)
@@ -203,7 +180,13 @@ class ApfDriver:
             rho0 = np.where(beside, p.rho0_beside_m + move + lat_closing**2 / (2 * p.rho0_decel_mps2),
                             p.rho0_min_m + cos_phi * (closing**2 / (2 * p.rho0_decel_mps2)
                                                       + p.rho0_headway_s * np.hypot(*v_ego)))
-            Ur, Fr = repulsion(rho, away, rho0, p.k_rep)
+            # a person standing (or walking along) behind the kerb beside the strip is felt like the kerb it
+            # stands at (its gain and reach): SUMO puts people waiting at a corner at the walking area's edge,
+            # at junctions up to 0.2 m into the lane, and its full push swung the ego at 1.5 m/s into a car
+            # standing in the oncoming lane, where it stopped on the crossing for good (Uberlandia, 9013072432)
+            kerb = beside & np.tile(sc.kerb_only, C)
+            rho0 = np.where(kerb, np.minimum(rho0, p.rho0_edge_m), rho0)
+            Ur, Fr = repulsion(rho, away, rho0, np.where(kerb, p.k_edge, p.k_rep))
             Fr[:, 0] = np.where(beside, 0.0, Fr[:, 0])  # ... and pushes only across it, never back
             # a car moves sideways only by turning, and turning swings its rear half the other way:
             # what is nearest to the rear half and left behind (not faster along the ego's heading)
@@ -359,7 +342,12 @@ class ApfDriver:
             return speed * np.array([np.cos(course), np.sin(course)])
         # a car going forward steers at most max_course off the road's direction and moves across
         # it at most at max_lat_speed: a wall a corner touches must not turn it sideways
-        course = np.clip(course, -self.max_course, self.max_course)
+        # creeping (slower than creep_align_mps) it turns towards the road's direction, straight below 0.3 of it:
+        # a car creeping in a queue gains no room across the road, its heading only turns (Uberlandia, edge
+        # 299472281#2: 0.35 rad in 2 m behind a cyclist, a car passing in the next lane clipped its rear corner)
+        creep = np.clip((speed / max(self.p.creep_align_mps, 1e-9) - 0.3) / 0.7, 0.0, 1.0)
+        lim = self.max_course * (creep if speed >= STOP_WISH_MPS else 1.0)
+        course = np.clip(course, -lim, lim)
         if speed < STOP_WISH_MPS:  # stopping: brake facing the course (in a bend, steering with the road; a
             # car braking with its wheels straight went on straight, 1.4 m towards an oncoming bus inside a
             # junction: bologna_bus_lane, radar, seed 2)
