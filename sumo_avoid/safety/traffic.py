@@ -140,7 +140,7 @@ class TrafficRulesLayer:
         self._caps = 0
         self._yields: set[tuple[str, float]] = set()  # (ego, stop line s) where the ego gave way
         self._allway = False  # an ego's route crosses an all-way stop: follow who stands since when
-        self._foes = False  # an ego's route has a link with foes: follow who stands since when (foes for good)
+        self._foes = False  # an ego's route has a link with foes or a wide exit: follow who stands since when (for good)
         self._tls_since: dict[str, tuple[str, float]] = {}  # light id -> (its state, since when), s
         self._stand: dict[str, tuple] = {}  # vehicle id -> (start, end (nan: still)) of its last standing run, s
         self._turn_radius_m = float(getattr(ctx, "turn_radius_m", 0.0) or 0.0)  # 0: no drivable line, no wide exits
@@ -154,7 +154,7 @@ class TrafficRulesLayer:
                  or bool(narrow) or self.p.speed_factor is not None)
         self._egos[task.vid] = _Ego(task, watch, wide=wide, narrow=narrow)
         self._allway |= any(lk.state == "w" and lk.foes for lk in task.links)
-        self._foes |= any(lk.foes for lk in task.links)
+        self._foes |= any(lk.foes for lk in task.links) or bool(wide)
 
     def _track_standing(self, obs) -> None:
         """When each vehicle near an ego came to stand (for the order of arrival at all-way stops,
@@ -229,7 +229,8 @@ class TrafficRulesLayer:
                     return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
             wide = e.wide.get(k)
             if (wide is not None and not late and d > 0 and
-                    oncoming_first(wide, e.s_m, lanes, snap.lane_pos, snap.speed) < p.gap_margin_s):
+                    oncoming_first(wide, e.s_m, lanes, snap.lane_pos, snap.speed,
+                                   (snap.time_s, p.standing_foe_wait_s, self._standing_since(snap))) < p.gap_margin_s):
                 return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
             if link.inside and d > 0 and not late:  # who is in the junction clears it first, on any link
                 clearing = clearing_arrivals(link.inside, lanes, snap.lane_pos, snap.speed, snap.length, {row})

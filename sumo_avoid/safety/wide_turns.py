@@ -22,7 +22,8 @@ it is not waited for, and the ego's road view keeps it an obstacle to steer clea
 (control/road_view.py: a vehicle within the room of the drivable line is in the scene). Where none
 gives way to the ego's link, it waits for others and stays in the sweep: the ego waits too
 (entering beside such a car, the ego would stand inside the turn next to it, with the traffic
-behind the ego queueing into the junction). The ego, its front at s, clears in
+behind the ego queueing into the junction), but not for ever: a vehicle that has stood still for the
+rules' ``standing_foe_wait_s`` (a jam beyond the junction), here or in the junction, holds it no longer. The ego, its front at s, clears in
 (s_clear - s) / ``TURN_CRAWL_MPS``, the speed it makes such turns at. Before its stop line the ego
 is held while an oncoming vehicle arrives before it has cleared, plus the rules' gap margin
 (rules.py), and while a car from the oncoming lane is still in the junction (on the internal lanes
@@ -101,12 +102,20 @@ def wide_exits(task: EgoTask, turn_radius_m: float) -> dict[int, WideExit]:
 
 
 def oncoming_first(wide: WideExit, s_front_m: float, lanes: dict[str, list[int]],
-                   lane_pos, speed) -> float:
+                   lane_pos, speed, standing=None) -> float:
     """(earliest arrival of an oncoming vehicle at the wide exit) - (when the ego has cleared it), s:
-    the ego must wait while this is below the gap margin. +inf when no vehicle comes."""
+    the ego must wait while this is below the gap margin. +inf when no vehicle comes. ``standing`` =
+    (now, wait, since(row, tls)) as for :func:`~sumo_avoid.road.yielding.foe_arrivals`: a vehicle that has
+    stood still for ``wait`` s or more (a jam beyond the junction) holds the ego no longer; the ego's road
+    view keeps it an obstacle (unseen Berlin, car56: held 400 s by a car standing in a queue on the
+    oncoming lane)."""
+    def moves(r: int) -> bool:
+        return (standing is None or float(speed[r]) >= STAND_MPS
+                or standing[0] - standing[2](r, "") < standing[1])
+
     t_clear = max(wide.s_clear_m - s_front_m, 0.0) / TURN_CRAWL_MPS
-    if any(lanes.get(lane) for lane in wide.inside) or any(
-            float(lane_pos[r]) < LEAVING_CLEAR_M for lane in wide.leaving for r in lanes.get(lane, ())):
+    if any(moves(r) for lane in wide.inside for r in lanes.get(lane, ())) or any(
+            float(lane_pos[r]) < LEAVING_CLEAR_M and moves(r) for lane in wide.leaving for r in lanes.get(lane, ())):
         return -np.inf  # a car still crossing the junction or just out of it beside the ego's wide entry
     first = np.inf
     for lane, offset, waits in wide.conflicts:
@@ -114,6 +123,6 @@ def oncoming_first(wide: WideExit, s_front_m: float, lanes: dict[str, list[int]]
             # past the conflict point it is in the ego's sweep until it has left its lane (then ``inside``),
             # unless it stands there and may wait for the ego (RoadView keeps it an obstacle)
             x, v = offset - float(lane_pos[r]), float(speed[r])
-            if x > 0.0 or v >= STAND_MPS or not waits:
+            if (x > 0.0 or v >= STAND_MPS or not waits) and moves(r):
                 first = min(first, arrival_time(x, v))
     return first - t_clear

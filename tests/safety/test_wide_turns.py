@@ -32,13 +32,25 @@ DATA = pathlib.Path(__file__).parent.parent / "data" / "tight_turn"
 WIDE = WideExit(120.0, (("L", 80.0, True), ("K", 80.0, False)), inside=("I",), leaving=("B",))
 
 
-def _first(rows):
+def _first(rows, standing=None):
     """oncoming_first for the ego's front at s = 110 m and vehicles [(lane, lane_pos, speed)]."""
     lanes: dict[str, list[int]] = {}
     for r, (lane, _, _) in enumerate(rows):
         lanes.setdefault(lane, []).append(r)
     return oncoming_first(WIDE, 110.0, lanes, np.array([p for _, p, _ in rows], float),
-                          np.array([v for _, _, v in rows], float))
+                          np.array([v for _, _, v in rows], float), standing)
+
+
+def test_a_vehicle_standing_for_good_holds_the_ego_no_longer():
+    # now 100 s, wait 30 s: stood since 60 s (40 s) it stands for good, since 80 s (20 s) not yet
+    good, not_yet = (100.0, 30.0, lambda r, tls: 60.0), (100.0, 30.0, lambda r, tls: 80.0)
+    assert _first([("K", 85.0, 0.0)], not_yet) == pytest.approx(-5.0)  # waits for others, in the sweep
+    assert _first([("K", 85.0, 0.0)], good) == math.inf  # a jam: the ego goes (its field keeps clear of it)
+    assert _first([("K", 75.0, 0.0)], good) == math.inf  # standing before the point alike
+    assert _first([("K", 50.0, 10.0)], good) == pytest.approx(-2.0)  # one that moves counts as before
+    assert _first([("I", 3.0, 0.0)], not_yet) == -math.inf and _first([("I", 3.0, 0.0)], good) == math.inf
+    assert _first([("B", 5.0, 0.0)], not_yet) == -math.inf and _first([("B", 5.0, 0.0)], good) == math.inf
+    assert _first([("I", 3.0, 6.0)], good) == -math.inf  # moving in the junction: still crossing it
 
 
 def test_oncoming_first_hand_computed():
