@@ -230,7 +230,7 @@ class TrafficRulesLayer:
             wide = e.wide.get(k)
             if (wide is not None and not late and d > 0 and
                     oncoming_first(wide, e.s_m, lanes, snap.lane_pos, snap.speed,
-                                   (snap.time_s, p.standing_foe_wait_s, self._standing_since(snap))) < p.gap_margin_s):
+                                   (snap.time_s, p.standing_foe_wait_s, self._standing_since(snap)), row) < p.gap_margin_s):
                 return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
             if link.inside and d > 0 and not late:  # who is in the junction clears it first, on any link
                 clearing = clearing_arrivals(link.inside, lanes, snap.lane_pos, snap.speed, snap.length, {row})

@@ -102,15 +102,15 @@ def wide_exits(task: EgoTask, turn_radius_m: float) -> dict[int, WideExit]:
 
 
 def oncoming_first(wide: WideExit, s_front_m: float, lanes: dict[str, list[int]],
-                   lane_pos, speed, standing=None) -> float:
+                   lane_pos, speed, standing=None, ego_row: int = -1) -> float:
     """(earliest arrival of an oncoming vehicle at the wide exit) - (when the ego has cleared it), s:
     the ego must wait while this is below the gap margin. +inf when no vehicle comes. ``standing`` =
     (now, wait, since(row, tls)) as for :func:`~sumo_avoid.road.yielding.foe_arrivals`: a vehicle that has
     stood still for ``wait`` s or more (a jam beyond the junction) holds the ego no longer; the ego's road
-    view keeps it an obstacle (unseen Berlin, car56: held 400 s by a car standing in a queue on the
-    oncoming lane)."""
+    view keeps it an obstacle. ``ego_row`` is never a vehicle in the way (at a turnaround the lane it
+    stands on is the exit's oncoming lane: unseen Berlin, car56 waited 400 s for itself)."""
     def moves(r: int) -> bool:
-        return (standing is None or float(speed[r]) >= STAND_MPS
+        return r != ego_row and (standing is None or float(speed[r]) >= STAND_MPS
                 or standing[0] - standing[2](r, "") < standing[1])
 
     t_clear = max(wide.s_clear_m - s_front_m, 0.0) / TURN_CRAWL_MPS

@@ -32,13 +32,13 @@ DATA = pathlib.Path(__file__).parent.parent / "data" / "tight_turn"
 WIDE = WideExit(120.0, (("L", 80.0, True), ("K", 80.0, False)), inside=("I",), leaving=("B",))
 
 
-def _first(rows, standing=None):
+def _first(rows, standing=None, ego_row=-1):
     """oncoming_first for the ego's front at s = 110 m and vehicles [(lane, lane_pos, speed)]."""
     lanes: dict[str, list[int]] = {}
     for r, (lane, _, _) in enumerate(rows):
         lanes.setdefault(lane, []).append(r)
     return oncoming_first(WIDE, 110.0, lanes, np.array([p for _, p, _ in rows], float),
-                          np.array([v for _, _, v in rows], float), standing)
+                          np.array([v for _, _, v in rows], float), standing, ego_row)
 
 
 def test_a_vehicle_standing_for_good_holds_the_ego_no_longer():
@@ -51,6 +51,12 @@ def test_a_vehicle_standing_for_good_holds_the_ego_no_longer():
     assert _first([("I", 3.0, 0.0)], not_yet) == -math.inf and _first([("I", 3.0, 0.0)], good) == math.inf
     assert _first([("B", 5.0, 0.0)], not_yet) == -math.inf and _first([("B", 5.0, 0.0)], good) == math.inf
     assert _first([("I", 3.0, 6.0)], good) == -math.inf  # moving in the junction: still crossing it
+
+
+def test_the_ego_is_never_in_its_own_way():
+    # at a turnaround the lane the ego stands on is its exit's oncoming lane: it does not wait for itself
+    assert _first([("K", 85.0, 0.0)], ego_row=0) == math.inf
+    assert _first([("K", 85.0, 0.0), ("K", 50.0, 10.0)], ego_row=0) == pytest.approx(-2.0)
 
 
 def test_oncoming_first_hand_computed():
