@@ -13,10 +13,11 @@ from sumo_avoid.studies.baseline import BASELINE, with_travel_time_ratio
 
 RUN_COLUMNS = ["scenario", "controller", "sensor", "seed", "status", "goal_reached", "time_to_goal_s", "travel_time_ratio",
                "collisions", "sumo_ego_collisions", "vru_collisions", "red_light_violations", "yield_violations",
-               "stop_sign_violations", "crossing_violations", "off_road_m", "forbidden_lane_m", "wrong_way_m", "phi_wall",
-               "min_gap_m", "min_gap_vru_m", "sumo_collisions", "sim_time_s", "wall_s", "code", "error"]
+               "stop_sign_violations", "crossing_violations", "off_road_m", "forbidden_lane_m", "wrong_way_m", "speeding_m",
+               "phi_wall", "min_gap_m", "min_gap_vru_m", "sumo_collisions", "sim_time_s", "wall_s", "code", "error"]
 HEAD = ("| scenario | controller | sensor | seeds | goal | collisions (ours / SUMO's with the ego) | vru_collisions "
-        "| red light / yield / stop sign / crossing | off_road_m | forbidden_lane_m / wrong_way_m | max phi_wall, m "
+        "| red light / yield / stop sign / crossing | off_road_m | forbidden_lane_m / wrong_way_m | speeding_m "
+        "| max phi_wall, m "
         "| median time to goal, s | median travel_time_ratio (runs with one) |")
 
 
@@ -46,6 +47,7 @@ def row(name: str, g: pd.DataFrame) -> str:
     return (f"| {name} | {seeds} | {_n(d, 'goal_reached')}/{len(g)} | {_n(d, 'collisions')} / "
             f"{_n(d, 'sumo_ego_collisions')} | {_n(d, 'vru_collisions')} | {viol} | {d['off_road_m'].sum():.1f} "
             f"| {d['forbidden_lane_m'].sum():.1f} / {d['wrong_way_m'].sum():.1f} | "
+            f"{(format(d['speeding_m'].sum(), '.1f') if 'speeding_m' in d else '-')} | "
             f"{d['phi_wall'].max():.2f} | {_median(d['time_to_goal_s'], '{:.1f}')} "
             f"| {_median(ratio, '{:.2f}')} ({int(ratio.notna().sum())}) |")
 

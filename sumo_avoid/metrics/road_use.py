@@ -22,6 +22,12 @@ whose length (m) counts wholly when its midpoint qualifies, with the heading of 
   sidewalk, a bike lane, a bus lane for a car -- read from the net, not from where SUMO maps the ego.
   None in an arena.
 
+* ``speeding_m``: the midpoint is inside a normal lane (outside every junction shape) and the ego's
+  recorded speed at the segment's first row exceeds the highest speed limit of the normal lanes holding
+  it by more than ``SPEEDING_TOL_MPS`` (1 km/h). The rules layer enforces limits only with
+  ``[layers.traffic] speed_factor`` set; SUMO's own drivers drive at their vType's speedFactor
+  (default: mean 1.0, deviation 0.1), so they exceed limits too. None in an arena.
+
 All are summed over the egos (m), 0.0 when no ego ever moved.
 """
 from __future__ import annotations
@@ -36,11 +42,13 @@ from sumo_avoid.metrics.standard import ego_class, ego_rows
 from sumo_avoid.road.walls import outside_distance as arena_outside_distance
 from sumo_avoid.rollout.result import RunResult
 
+SPEEDING_TOL_MPS = 1.0 / 3.6  # speeding is more than 1 km/h over the limit
+
 
 def ego_segments(traj: pd.DataFrame, egos: EgoRows | None = None, with_ids: bool = False) -> tuple:
     """Every ego's consecutive rows (by step) as segments: (K,2) midpoints, (K,2) displacements, m,
-    and (K,2) unit heading vectors of each segment's first row (and, ``with_ids``, (K,) its ego's id);
-    segments of zero length are left out."""
+    and (K,2) unit heading vectors of each segment's first row (and, ``with_ids``, (K,) its ego's id and
+    (K,) its first row's speed, m/s); segments of zero length are left out."""
     egos = EgoRows.of(traj) if egos is None else egos
     e = egos.table
     o = egos.by_id()
@@ -51,7 +59,9 @@ def ego_segments(traj: pd.DataFrame, egos: EgoRows | None = None, with_ids: bool
     mid = 0.5 * (p[:-1] + p[1:])
     h = e["heading"].to_numpy(float)[o][:-1]
     out = mid[keep], d[keep], np.column_stack([np.cos(h), np.sin(h)])[keep]
-    return (*out, egos.ids[code[:-1][keep]]) if with_ids else out
+    if not with_ids:
+        return out
+    return (*out, egos.ids[code[:-1][keep]], np.abs(e["speed"].to_numpy(float)[o][:-1][keep]))
 
 
 def forbidden(road, mid: np.ndarray, vclass: np.ndarray) -> np.ndarray:
@@ -72,8 +82,21 @@ def forbidden(road, mid: np.ndarray, vclass: np.ndarray) -> np.ndarray:
     return held & ~fine & classed & ~road.lanes.in_junction(mid)
 
 
+def over_limit(road, mid: np.ndarray, speed: np.ndarray) -> np.ndarray:
+    """(K,) True where a midpoint lies in a normal lane (outside every junction shape: internal lanes
+    carry netconvert's turning speeds, no legal limit) and the speed exceeds by more than
+    :data:`SPEEDING_TOL_MPS` the highest limit of the normal lanes holding it."""
+    if not len(mid):
+        return np.zeros(0, bool)
+    p, q = road.lanes.holding(mid)
+    lanes, ids = road.elements.lanes, road.lanes.ids
+    limit = np.full(len(mid), -np.inf)
+    np.maximum.at(limit, p, np.array([lanes[ids[k]].speed_mps for k in q], float))
+    return np.isfinite(limit) & (speed > limit + SPEEDING_TOL_MPS) & ~road.lanes.in_junction(mid)
+
+
 def road_use(run: RunResult) -> dict:
-    mid, d, hd, who = ego_segments(run.traj, ego_rows(run), with_ids=True)
+    mid, d, hd, who, speed = ego_segments(run.traj, ego_rows(run), with_ids=True)
     length = np.hypot(d[:, 0], d[:, 1])
     reverse_m = float(length[np.einsum("ij,ij->i", hd, d) < 0].sum())
     scene = run.scene
@@ -86,19 +109,20 @@ def road_use(run: RunResult) -> dict:
         wrong = run.road.lanes.against(mid, hd) if len(mid) else np.zeros(0, bool)
         wrong_m = float(length[wrong].sum())
         banned_m = float(length[forbidden(run.road, mid, vclass)].sum())
+        speeding_m = float(length[over_limit(run.road, mid, speed)].sum())
     else:
         out = arena_outside_distance(mid, scene.walls, scene.obstacles) > 0
-        wrong_m = banned_m = None
+        wrong_m = banned_m = speeding_m = None
     return {"wrong_way_m": wrong_m, "off_road_m": float(length[out].sum()), "reverse_m": reverse_m,
-            "forbidden_lane_m": banned_m}
+            "forbidden_lane_m": banned_m, "speeding_m": speeding_m}
 
 
 
 class RoadUse(Metric):
-    """wrong_way_m, off_road_m, reverse_m, forbidden_lane_m: metres the egos drove facing a lane's
-    traffic, off the road, backwards, and on lanes closed to their class."""
+    """wrong_way_m, off_road_m, reverse_m, forbidden_lane_m, speeding_m: metres the egos drove facing a
+    lane's traffic, off the road, backwards, on lanes closed to their class, and above the speed limit."""
 
-    keys = Keys(("wrong_way_m", "off_road_m", "reverse_m", "forbidden_lane_m"))
+    keys = Keys(("wrong_way_m", "off_road_m", "reverse_m", "forbidden_lane_m", "speeding_m"))
 
     def compute(self, run: RunResult) -> dict:
         return road_use(run)

@@ -16,8 +16,8 @@ from sumo_avoid.road.network import Road
 # junction shape spans |x|, |y| <= 11
 
 
-def path(vid, xs, ys, heading, ego=True):
-    return [{"step": k, "time_s": 0.1 * k, "id": vid, "is_ego": ego, "x": float(x), "y": float(y), "vx": 0.0, "vy": 0.0, "speed": 0.0,
+def path(vid, xs, ys, heading, ego=True, speed=0.0):
+    return [{"step": k, "time_s": 0.1 * k, "id": vid, "is_ego": ego, "x": float(x), "y": float(y), "vx": 0.0, "vy": 0.0, "speed": speed,
                  "heading": heading, "length": 4.0, "width": 2.0} for k, (x, y) in enumerate(zip(xs, ys))]
 
 
@@ -58,7 +58,20 @@ def test_a_car_facing_the_traffic_is_against_it_whichever_way_it_moves():
 
 def test_no_ego_moved():
     rows = path("still", np.zeros(5), np.full(5, -100.0), 0.0)
-    assert road_use(result(rows)) == {"wrong_way_m": 0.0, "off_road_m": 0.0, "reverse_m": 0.0, "forbidden_lane_m": 0.0}
+    assert road_use(result(rows)) == {"wrong_way_m": 0.0, "off_road_m": 0.0, "reverse_m": 0.0, "forbidden_lane_m": 0.0,
+                                      "speeding_m": 0.0}
+
+
+def test_speeding_is_more_than_1_kmh_over_the_limit_of_the_lane_outside_junctions():
+    # left_turn's lanes allow 13.89 m/s; speeding is above 13.89 + 1/3.6 = 14.168 m/s
+    north = math.pi / 2
+    up = np.arange(-120.0, -59.0)  # 60 segments of 1 m in S2C
+    rows = (path("fast", np.full(61, 1.75), up, north, speed=15.0)  # 60 m over the limit
+            + path("at_limit", np.full(61, 5.25), up, north, speed=14.1)  # 0.21 m/s over: within the tolerance
+            + path("junction", np.full(7, 1.75), np.arange(-3.0, 4.0), north, speed=20.0)  # no limit there: 0
+            + path("field", np.full(61, 30.0), up, north, speed=30.0)  # off every lane: 0 (it is off_road_m)
+            + path("other", np.full(61, -1.75), up, -north, ego=False, speed=30.0))  # not an ego
+    assert road_use(result(rows))["speeding_m"] == pytest.approx(60.0)
 
 
 def test_real_run_a_blind_ego_backing_up_a_one_way_road():
