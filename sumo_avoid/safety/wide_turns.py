@@ -22,8 +22,8 @@ it is not waited for, and the ego's road view keeps it an obstacle to steer clea
 (control/road_view.py: a vehicle within the room of the drivable line is in the scene). Where none
 gives way to the ego's link, it waits for others and stays in the sweep: the ego waits too
 (entering beside such a car, the ego would stand inside the turn next to it, with the traffic
-behind the ego queueing into the junction), but not for ever: a vehicle that has stood still for the
-rules' ``standing_foe_wait_s`` (a jam beyond the junction), here or in the junction, holds it no longer. The ego, its front at s, clears in
+behind the ego queueing into the junction). A vehicle queued before the conflict point that has stood still
+for the rules' ``standing_foe_wait_s`` does not come (as for the yield rule's foes). The ego, its front at s, clears in
 (s_clear - s) / ``TURN_CRAWL_MPS``, the speed it makes such turns at. Before its stop line the ego
 is held while an oncoming vehicle arrives before it has cleared, plus the rules' gap margin
 (rules.py), and while a car from the oncoming lane is still in the junction (on the internal lanes
@@ -106,23 +106,26 @@ def oncoming_first(wide: WideExit, s_front_m: float, lanes: dict[str, list[int]]
     """(earliest arrival of an oncoming vehicle at the wide exit) - (when the ego has cleared it), s:
     the ego must wait while this is below the gap margin. +inf when no vehicle comes. ``standing`` =
     (now, wait, since(row, tls)) as for :func:`~sumo_avoid.road.yielding.foe_arrivals`: a vehicle that has
-    stood still for ``wait`` s or more (a jam beyond the junction) holds the ego no longer; the ego's road
-    view keeps it an obstacle. ``ego_row`` is never a vehicle in the way (at a turnaround the lane it
+    stood still for ``wait`` s or more before the conflict point (queued at its line) does not come; one in
+    the sweep, in the junction or just out of it beside the entry still holds the ego (gen_rand08 seed 4:
+    released after 30 s, the ego stood inside the junction beside a car standing in its sweep and the car
+    behind it ran into it). ``ego_row`` is never a vehicle in the way (at a turnaround the lane it
     stands on is the exit's oncoming lane: unseen Berlin, car56 waited 400 s for itself)."""
-    def moves(r: int) -> bool:
-        return r != ego_row and (standing is None or float(speed[r]) >= STAND_MPS
-                or standing[0] - standing[2](r, "") < standing[1])
+    def for_good(r: int) -> bool:
+        return (standing is not None and float(speed[r]) < STAND_MPS
+                and standing[0] - standing[2](r, "") >= standing[1])
 
     t_clear = max(wide.s_clear_m - s_front_m, 0.0) / TURN_CRAWL_MPS
-    if any(moves(r) for lane in wide.inside for r in lanes.get(lane, ())) or any(
-            float(lane_pos[r]) < LEAVING_CLEAR_M and moves(r) for lane in wide.leaving for r in lanes.get(lane, ())):
+    if any(r != ego_row for lane in wide.inside for r in lanes.get(lane, ())) or any(
+            float(lane_pos[r]) < LEAVING_CLEAR_M and r != ego_row for lane in wide.leaving for r in lanes.get(lane, ())):
         return -np.inf  # a car still crossing the junction or just out of it beside the ego's wide entry
     first = np.inf
     for lane, offset, waits in wide.conflicts:
         for r in lanes.get(lane, ()):
             # past the conflict point it is in the ego's sweep until it has left its lane (then ``inside``),
-            # unless it stands there and may wait for the ego (RoadView keeps it an obstacle)
+            # unless it stands there and may wait for the ego (RoadView keeps it an obstacle); one standing for
+            # good before the point does not come
             x, v = offset - float(lane_pos[r]), float(speed[r])
-            if (x > 0.0 or v >= STAND_MPS or not waits) and moves(r):
+            if r != ego_row and (x > 0.0 or v >= STAND_MPS or not waits) and not (x > 0.0 and for_good(r)):
                 first = min(first, arrival_time(x, v))
     return first - t_clear

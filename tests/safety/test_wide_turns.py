@@ -41,16 +41,16 @@ def _first(rows, standing=None, ego_row=-1):
                           np.array([v for _, _, v in rows], float), standing, ego_row)
 
 
-def test_a_vehicle_standing_for_good_holds_the_ego_no_longer():
+def test_a_vehicle_queued_before_the_point_for_good_does_not_come():
     # now 100 s, wait 30 s: stood since 60 s (40 s) it stands for good, since 80 s (20 s) not yet
     good, not_yet = (100.0, 30.0, lambda r, tls: 60.0), (100.0, 30.0, lambda r, tls: 80.0)
-    assert _first([("K", 85.0, 0.0)], not_yet) == pytest.approx(-5.0)  # waits for others, in the sweep
-    assert _first([("K", 85.0, 0.0)], good) == math.inf  # a jam: the ego goes (its field keeps clear of it)
-    assert _first([("K", 75.0, 0.0)], good) == math.inf  # standing before the point alike
+    assert _first([("K", 75.0, 0.0)], not_yet) == pytest.approx(5.0 / 1.0 - 5.0)  # 5 m before: arrives in 5 s
+    assert _first([("K", 75.0, 0.0)], good) == math.inf  # queued at its line for good: it does not come
     assert _first([("K", 50.0, 10.0)], good) == pytest.approx(-2.0)  # one that moves counts as before
-    assert _first([("I", 3.0, 0.0)], not_yet) == -math.inf and _first([("I", 3.0, 0.0)], good) == math.inf
-    assert _first([("B", 5.0, 0.0)], not_yet) == -math.inf and _first([("B", 5.0, 0.0)], good) == math.inf
-    assert _first([("I", 3.0, 6.0)], good) == -math.inf  # moving in the junction: still crossing it
+    # in the sweep, in the junction, just out of it beside the entry: it holds the ego however long it stands
+    assert _first([("K", 85.0, 0.0)], good) == pytest.approx(-5.0)
+    assert _first([("I", 3.0, 0.0)], good) == -math.inf
+    assert _first([("B", 5.0, 0.0)], good) == -math.inf
 
 
 def test_the_ego_is_never_in_its_own_way():
