@@ -89,7 +89,10 @@ def wide_exits(task: EgoTask, turn_radius_m: float) -> dict[int, WideExit]:
         lo, hi = lanes.corridor(s)
         bent = np.abs(off) > 1e-9
         conflicts, ends, inside = [], [], []
+        came_by = {p.edge for p in task.lanes if p.s_start_m < link.s_stop_m}
         for onc in link.oncoming:
+            if onc.lane.rsplit("_", 1)[0] in came_by:
+                continue  # a turnaround: that lane is the ego's own, who is on it is ahead of the ego or follows it
             over = bent & ((off + reach > hi) if onc.side > 0 else (off - reach < lo))
             if over.any():
                 end = float(s[np.flatnonzero(over)[-1]]) + STEP_M

@@ -129,3 +129,21 @@ def test_ego_waits_for_the_oncoming_car_its_wide_exit_would_meet(nets, monkeypat
     assert m["min_gap_m"] > 0.1
     m = _run(d, net["t130"], monkeypatch, hold=False)  # without the hold the same traffic meets at the exit
     assert m["collisions"] >= 1
+
+
+@pytest.mark.sumo
+def test_a_turnaround_does_not_wait_for_the_ego_s_own_lane(tmp_path):
+    # turning round at B (AB -> BA), the exit's oncoming lane is AB_0, the lane the ego comes by: who is on it
+    # is ahead of the ego (turning round first) or follows it; it is no conflict (unseen Berlin: an ego waited
+    # 370 s at a dead end for the cars queued ahead of it on its own lane)
+    (tmp_path / "u.nod.xml").write_text('<nodes><node id="A" x="0" y="0"/><node id="B" x="100" y="0"/></nodes>')
+    (tmp_path / "u.edg.xml").write_text('<edges><edge id="AB" from="A" to="B" numLanes="1" speed="13.9"/>'
+                                        '<edge id="BA" from="B" to="A" numLanes="1" speed="13.9"/></edges>')
+    net = tmp_path / "u.net.xml"  # B a dead end: netconvert gives it a turnaround
+    subprocess.run([str(BIN / "netconvert"), "-n", str(tmp_path / "u.nod.xml"), "-e", str(tmp_path / "u.edg.xml"),
+                    "-o", str(net)], check=True, capture_output=True)
+    plan = Road.from_net_file(str(net)).route(["AB", "BA"])
+    assert [o.lane for lk in plan.links for o in lk.oncoming] == ["AB_0"]  # SUMO's view: AB is BA's oncoming lane
+    task = EgoTask("ego", plan.path[-1], plan.path, 12.0, plan.links, None, plan.lanes, 1.8, 5.0)
+    assert all(c[0] != "AB_0" for w in wide_exits(task, 4.25).values() for c in w.conflicts)
+
