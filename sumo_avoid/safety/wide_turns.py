@@ -44,7 +44,7 @@ from sumo_avoid.road.drivable import REACH_M, drivable_line
 from sumo_avoid.road.frenet import RouteFrame
 from sumo_avoid.road.route_lanes import RouteLanes
 from sumo_avoid.core.types import EgoTask
-from sumo_avoid.road.yielding import STAND_MPS, arrival_time
+from sumo_avoid.road.yielding import STAND_MPS, arrival_time, stands_for_good
 
 #: A car may stray this far from its drivable line in a tight turn, m.
 TRACK_ERROR_M = 0.5
@@ -114,10 +114,6 @@ def oncoming_first(wide: WideExit, s_front_m: float, lanes: dict[str, list[int]]
     released after 30 s, the ego stood inside the junction beside a car standing in its sweep and the car
     behind it ran into it). ``ego_row`` is never a vehicle in the way (at a turnaround the lane it
     stands on is the exit's oncoming lane: unseen Berlin, car56 waited 400 s for itself)."""
-    def for_good(r: int) -> bool:
-        return (standing is not None and float(speed[r]) < STAND_MPS
-                and standing[0] - standing[2](r, "") >= standing[1])
-
     t_clear = max(wide.s_clear_m - s_front_m, 0.0) / TURN_CRAWL_MPS
     if any(r != ego_row for lane in wide.inside for r in lanes.get(lane, ())) or any(
             float(lane_pos[r]) < LEAVING_CLEAR_M and r != ego_row for lane in wide.leaving for r in lanes.get(lane, ())):
@@ -129,6 +125,7 @@ def oncoming_first(wide: WideExit, s_front_m: float, lanes: dict[str, list[int]]
             # unless it stands there and may wait for the ego (RoadView keeps it an obstacle); one standing for
             # good before the point does not come
             x, v = offset - float(lane_pos[r]), float(speed[r])
-            if r != ego_row and (x > 0.0 or v >= STAND_MPS or not waits) and not (x > 0.0 and for_good(r)):
+            if r != ego_row and (x > 0.0 or v >= STAND_MPS or not waits) and not (
+                    x > 0.0 and standing is not None and stands_for_good(x, v, *standing, r, "")):
                 first = min(first, arrival_time(x, v))
     return first - t_clear

@@ -199,6 +199,12 @@ class ApfDriver:
             F = F + Fr.reshape(C, O, 2).sum(axis=1)
             v_safe = self._governor(q_cand[0], hd, L, W, oc, sc.o_vel, crawl[:O])
 
+        U, F = self._bounds(sc, q_cand, U, F)
+        return Field(U, F, float(v_safe))
+
+    def _bounds(self, sc: FrenetScene, q_cand: np.ndarray, U: np.ndarray, F: np.ndarray):
+        """U, F plus the push of the bounds of the ego's lanes on the candidates (C of them)."""
+        p, C, L, W, v_ego = self.p, len(q_cand), sc.length, sc.width, sc.vel
         # the bounds of the ego's lanes, one line on each side, repel across the road (always
         # inwards: a car past a bound is pushed back, never further out) from the footprint's
         # corner nearest to each, with the bound taken at that corner's s
@@ -216,7 +222,7 @@ class ApfDriver:
             rho0 = min(rho0, 0.8 * room)  # in a narrow lane a centred car feels neither bound
             Ur, Fr = repulsion(rho, np.tile([0.0, inward], (C, 1)), np.full(C, rho0), p.k_edge, rho_floor=0.05)
             U, F = U + Ur, F + Fr
-        return Field(U, F, float(v_safe))
+        return U, F
 
     def _beside(self, sc: FrenetScene, q_cand, h: float, ego_corners, oc, v_rel, away):
         """Per (candidate, vehicle) pair, (C*O,) each: which vehicles are beside the ego's strip (incl. those
