@@ -27,6 +27,9 @@ Per ego and step, with s the arc length of the ego's front bumper projected on i
   treat it as a link leader). SUMO's vehicles enter when they see no SUMO-driven foe coming, and an
   ego standing at its line is none; one standing inside (waiting at its internal stop for the ego)
   does not hold it.
+* **Junction box.** Before the nearest link ahead the ego is held at its stop line while a vehicle stands
+  in the strip it would sweep through the junction, or the exit lacks room for it (SUMO's drivers do not
+  enter a junction they could not leave; :mod:`sumo_avoid.safety.junction_box`).
 * **Wide exits.** Where a turn is too tight for the car and its drivable line swings into the
   oncoming lane of the exit edge, the ego is held at its stop line until that lane is clear for
   the time it takes to make the turn (:mod:`sumo_avoid.safety.wide_turns`), on any link.
@@ -68,6 +71,7 @@ from sumo_avoid.road.polyline import polyline_point_at, polyline_track
 from sumo_avoid.road.regulation import RED, STOP_SIGNS, RulesParams
 from sumo_avoid.core.types import EgoTask, Keys
 from sumo_avoid.safety.crossing_rule import CrossingRule
+from sumo_avoid.safety.junction_box import box_cap, junction_exits
 from sumo_avoid.safety.narrow_streets import narrow_cap, narrow_stretches
 from sumo_avoid.safety.wide_turns import oncoming_first, wide_exits
 from sumo_avoid.road.yielding import (
@@ -104,6 +108,7 @@ class _Ego:
     stopped: dict = field(default_factory=dict)  # link position of a stop sign where the ego has stood -> since when, s
     wide: dict = field(default_factory=dict)  # link position -> its wide exit into oncoming traffic (wide_turns)
     narrow: tuple = ()  # stretches too narrow to pass an oncoming car (narrow_streets)
+    exits: tuple = ()  # per link, s where the route leaves its junction (junction_box)
 
 
 def signal_char(signals, link) -> str:
@@ -152,7 +157,8 @@ class TrafficRulesLayer:
         narrow = narrow_stretches(task) if task.lanes else ()
         watch = (any(lk.tls or lk.foes or lk.inside or lk.state in STOP_SIGNS or lk.crossings for lk in task.links) or bool(wide)
                  or bool(narrow) or self.p.speed_factor is not None)
-        self._egos[task.vid] = _Ego(task, watch, wide=wide, narrow=narrow)
+        exits = junction_exits(task) if task.lanes else ()
+        self._egos[task.vid] = _Ego(task, watch or any(x == x for x in exits), wide=wide, narrow=narrow, exits=exits)
         self._allway |= any(lk.state == "w" and lk.foes for lk in task.links)
         self._foes |= any(lk.foes for lk in task.links) or bool(wide)
 
@@ -296,11 +302,16 @@ class TrafficRulesLayer:
                              if e.narrow else (math.inf, -1.0))
             if narrow < v or narrow < 0.5:
                 self._yields.add((vid, nline))
-            cap = min(sig, road, give, cross, narrow)
+            # never stop inside a junction behind a vehicle that cannot leave (junction_box)
+            box, bline = (box_cap(e.task, e.exits, e.s_m, v, speed, snap, int(r), float(snap.length[r]),
+                                  float(snap.width[r]), self.p) if e.exits else (math.inf, -1.0))
+            if box < v or box < 0.5:
+                self._yields.add((vid, bline))
+            cap = min(sig, road, give, cross, narrow, box)
             if speed > cap:
-                self._caps += road < min(sig, give, cross, narrow)
+                self._caps += road < min(sig, give, cross, narrow, box)
                 out[i] *= cap / speed
-                if min(sig, cross, narrow) <= cap and cap < HELD_MPS:
+                if min(sig, cross, narrow, box) <= cap and cap < HELD_MPS:
                     # held at a line: wait lined up with the lane, not already turned into the junction
                     # (a car standing askew at its line blocks the next lane and its corner the sidewalk)
                     out[i] = cap * _direction(e.task.path, e.s_m)
