@@ -128,6 +128,31 @@ class RightOfWay:
                 last = min(last, int(bad[0]) - 1)
         return float(s[last]) if last > 0 else float("nan")
 
+    def hold_s(self, conn, path, cum, s_stop_m: float, clear_m: float, half_width_m: float, back_m: float) -> float:
+        """Where on the ego's ``path`` a car on ``conn`` waits for the junction: the stop line, or, where the path
+        of another link into the junction from another edge (its internal lanes' centre line) passes within
+        ``clear_m`` of the front corners (or the front's centre) of a car ``2 half_width_m`` wide standing
+        there, the nearest arc length before it at most ``back_m`` back where none does (netconvert's joined
+        junctions draw turns over other roads' stop lines: the cars turning there hit a car waiting at its
+        line). The stop line itself when no such arc length is found."""
+        node = conn.getFrom().getToNode()
+        lines = [_chain_line(self.via_chain(o)) for o in node.getConnections()
+                 if o.getFrom() is not conn.getFrom() and not o.getFromLane().getID().startswith(":")]
+        lines = [ln for ln in lines if ln is not None]
+        if not lines:
+            return float(s_stop_m)
+        s = np.arange(s_stop_m, max(s_stop_m - back_m, 0.0) - 1e-9, -0.25)
+        x, y = np.interp(s, cum, path[:, 0]), np.interp(s, cum, path[:, 1])
+        tx, ty = x - np.interp(s - 0.5, cum, path[:, 0]), y - np.interp(s - 0.5, cum, path[:, 1])
+        n = np.hypot(tx, ty)
+        nx, ny = -ty / np.maximum(n, 1e-9), tx / np.maximum(n, 1e-9)
+        corners = np.column_stack([x + half_width_m * nx, y + half_width_m * ny, x - half_width_m * nx,
+                                   y - half_width_m * ny, x, y]).reshape(-1, 3, 2)
+        pts = shapely.points(corners.reshape(-1, 2))
+        d = np.min([shapely.distance(line, pts).reshape(-1, 3).min(axis=1) for line in lines], axis=0)
+        ok = np.flatnonzero(d >= clear_m)
+        return float(s[ok[0]]) if len(ok) else float(s_stop_m)
+
     def _ever_together(self, conn, other) -> bool:
         """May ``other`` be open (not red) while ``conn`` has green, by the net's signal programs? True
         when not both are on one light or the net has no program for it (it may come from elsewhere)."""

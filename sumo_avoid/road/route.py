@@ -59,13 +59,24 @@ class RouteLink:
     # links without priority over this one that cross or merge with it, their internal lanes only: a vehicle
     # moving there is in the junction and clears it first (sumo.right_of_way.RightOfWay.inside)
     inside: tuple[FoeLink, ...] = ()
+    # where the ego waits for the junction: the stop line, or before it where other links' turns sweep the stop
+    # line (right_of_way.RightOfWay.hold_s), m; nan = the stop line
+    s_hold_m: float = float("nan")
+
+    def hold_line_m(self, s_front_m: float, v_mps: float, decel_mps2: float, margin_m: float) -> float:
+        """The line the ego waits at: :attr:`s_hold_m` when it can still stop ``margin_m`` before it braking at
+        ``decel_mps2`` from ``v_mps`` (its front at ``s_front_m``), else the stop line."""
+        if self.s_hold_m == self.s_hold_m and self.s_hold_m < self.s_stop_m:
+            if v_mps * v_mps / (2.0 * decel_mps2) <= self.s_hold_m - s_front_m - margin_m + 0.5:
+                return self.s_hold_m
+        return self.s_stop_m
 
     @property
     def yield_line_m(self) -> float:
         """Where the ego gives way to the link's foes: at a signalised link with an internal junction,
         there (SUMO's drivers enter on green and wait in the junction, and clear it when the light turns
         and the oncoming traffic stops); else at the stop line."""
-        return self.s_wait_m if self.tls and self.s_wait_m > self.s_stop_m else self.s_stop_m
+        return self.s_wait_m if self.tls and self.s_wait_m > self.s_stop_m else self.s_stop_m  # (s_hold_m: hold_line_m)
 
 
 @dataclass(frozen=True)

@@ -18,6 +18,9 @@ CROSSING_REACH_M = 10.0  # a link's crossings are looked for this far before and
 WAIT_CLEAR_M = 1.8  # a turn waiting inside a junction keeps its front corners this far from a crossing foe's
 #: path (its centre line: half a car's width and 0.9 m to spare for the ego's heading, which leads the path), m
 WAIT_HALF_WIDTH_M = 1.0  # ... taken for a car this half wide, m
+HOLD_CLEAR_M = 1.2  # a car waiting for a junction keeps its front corners this far from other links' paths into it
+#: (their centre lines: a turning car's half width and 0.3 m to spare), m
+HOLD_BACK_M = 8.0  # ... moving back from the stop line at most this far, m
 KERB_REACH_M = 1.0  # how far beyond an internal lane's borders a walkway is looked for (kerb_room), m
 
 
@@ -256,7 +259,8 @@ class RoutePlanner:
                          tuple(o.lane for o in self._oncoming(conn.getFrom())),
                          crossing_links(self._net, conn, path, cum, s_stop_m - CROSSING_REACH_M,
                                         s_stop_m + through + CROSSING_REACH_M), float(wait),
-                         self.right_of_way.inside(conn))
+                         self.right_of_way.inside(conn),
+                         self.right_of_way.hold_s(conn, path, cum, s_stop_m, HOLD_CLEAR_M, WAIT_HALF_WIDTH_M, HOLD_BACK_M))
 
     def _oncoming(self, edge, conn=None) -> tuple[OncomingLane, ...]:
         """The lane bordering ``edge`` on every edge that runs the other way between the same two

@@ -212,7 +212,9 @@ class TrafficRulesLayer:
                 e.yellow[k] = STOP if (v * v / (2.0 * p.comfort_decel_mps2) <= d + p.stop_margin_m and not
                                        stands_on_crossing(e.task.links, e.s_m, link.s_stop_m, length_m)) else GO
             if c in RED or e.yellow.get(k) == STOP:
-                here = math.sqrt(2.0 * p.comfort_decel_mps2 * max(d, 0.0))
+                # (the yellow's stop-or-go is judged at the stop line itself; the ego waits at the hold line)
+                hold = link.hold_line_m(e.s_m, v, p.comfort_decel_mps2, p.stop_margin_m)
+                here = math.sqrt(2.0 * p.comfort_decel_mps2 * max(hold - e.s_m - p.stop_margin_m, 0.0))
                 if here < cap:
                     cap, line = here, link.s_stop_m
         return cap, line
@@ -228,25 +230,26 @@ class TrafficRulesLayer:
             if d > p.lookahead_m:
                 break
             late = v * v / (2.0 * p.commit_decel_mps2) > d
+            d_hold = link.hold_line_m(e.s_m, v, p.comfort_decel_mps2, p.stop_margin_m) - e.s_m  # where it waits
             if d > 0 and k not in e.stopped and link_state(snap.signals, link.tls, link.link_index, link.state) in STOP_SIGNS:
                 if v < p.stop_speed_mps and d - p.stop_margin_m <= p.stop_zone_m:
                     e.stopped[k] = snap.time_s  # stood at the sign: from now on it only gives way
-                elif not late:
+                elif not late:  # (at the line itself: the law's stop zone)
                     return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
             wide = e.wide.get(k)
             if (wide is not None and not late and d > 0 and
                     oncoming_first(wide, e.s_m, lanes, snap.lane_pos, snap.speed,
                                    (snap.time_s, p.standing_foe_wait_s, self._standing_since(snap)), row) < p.gap_margin_s):
-                return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
+                return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d_hold - p.stop_margin_m, 0.0)), link.s_stop_m
             if link.inside and d > 0 and not late:  # who is in the junction clears it first, on any link
                 clearing = clearing_arrivals(link.inside, lanes, snap.lane_pos, snap.speed, snap.length, {row})
                 if min(clearing, default=math.inf) < (ego_time_to_line(d, v, p.stop_margin_m) + critical_gap_s(link, p)
                                                        + p.gap_margin_s):
-                    return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
+                    return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d_hold - p.stop_margin_m, 0.0)), link.s_stop_m
             if not link.foes:
                 continue
             if link.yield_line_m > link.s_stop_m:  # a signalised turn waits at its internal junction
-                d = link.yield_line_m - e.s_m
+                d = d_hold = link.yield_line_m - e.s_m
                 if d <= 0:
                     continue
                 late = v * v / (2.0 * p.commit_decel_mps2) > d
@@ -264,7 +267,7 @@ class TrafficRulesLayer:
                 t_slot = zipper_slot(t_e, arrivals, t_c + p.gap_margin_s, give)
                 return (math.inf, -1.0) if t_slot <= t_e else (max(d - p.stop_margin_m, 0.0) / t_slot, link.s_stop_m)
             if min(arrivals, default=math.inf) < t_e + t_c + p.gap_margin_s:
-                return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.yield_line_m
+                return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d_hold - p.stop_margin_m, 0.0)), link.yield_line_m
             return math.inf, -1.0  # the nearest yield line ahead is clear: the ones after it wait their turn
         return math.inf, -1.0
 
