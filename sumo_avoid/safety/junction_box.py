@@ -89,7 +89,7 @@ def box_cap(task, exits, s_front: float, v: float, v_cmd: float, snap, ego_row: 
             continue
         if d > p.lookahead_m or v * v / (2.0 * p.commit_decel_mps2) > d:
             return math.inf, -1.0  # too far to matter yet, or too late to stop: go on
-        hold = link.hold_line_m(s_front, v, p.comfort_decel_mps2, p.stop_margin_m)  # where it waits
+        hold = link.hold_line_m(s_front, v, p.commit_decel_mps2, p.stop_margin_m)  # where it waits
         cap = math.sqrt(2.0 * p.comfort_decel_mps2 * max(hold - s_front - p.stop_margin_m, 0.0))
         if cap > max(v, v_cmd, 0.5):
             return math.inf, -1.0

@@ -213,7 +213,7 @@ class TrafficRulesLayer:
                                        stands_on_crossing(e.task.links, e.s_m, link.s_stop_m, length_m)) else GO
             if c in RED or e.yellow.get(k) == STOP:
                 # (the yellow's stop-or-go is judged at the stop line itself; the ego waits at the hold line)
-                hold = link.hold_line_m(e.s_m, v, p.comfort_decel_mps2, p.stop_margin_m)
+                hold = link.hold_line_m(e.s_m, v, p.commit_decel_mps2, p.stop_margin_m)
                 here = math.sqrt(2.0 * p.comfort_decel_mps2 * max(hold - e.s_m - p.stop_margin_m, 0.0))
                 if here < cap:
                     cap, line = here, link.s_stop_m
@@ -230,7 +230,7 @@ class TrafficRulesLayer:
             if d > p.lookahead_m:
                 break
             late = v * v / (2.0 * p.commit_decel_mps2) > d
-            d_hold = link.hold_line_m(e.s_m, v, p.comfort_decel_mps2, p.stop_margin_m) - e.s_m  # where it waits
+            d_hold = link.hold_line_m(e.s_m, v, p.commit_decel_mps2, p.stop_margin_m) - e.s_m  # where it waits
             if d > 0 and k not in e.stopped and link_state(snap.signals, link.tls, link.link_index, link.state) in STOP_SIGNS:
                 if v < p.stop_speed_mps and d - p.stop_margin_m <= p.stop_zone_m:
                     e.stopped[k] = snap.time_s  # stood at the sign: from now on it only gives way
