@@ -113,13 +113,7 @@ class RightOfWay:
         if not lines:
             return float("nan")
         s = np.arange(s_stop_m, s_stop_m + total, 0.25)
-        x, y = np.interp(s, cum, path[:, 0]), np.interp(s, cum, path[:, 1])
-        tx, ty = np.interp(s + 0.5, cum, path[:, 0]) - x, np.interp(s + 0.5, cum, path[:, 1]) - y
-        n = np.hypot(tx, ty)
-        nx, ny = -ty / np.maximum(n, 1e-9), tx / np.maximum(n, 1e-9)
-        corners = np.column_stack([x + half_width_m * nx, y + half_width_m * ny, x - half_width_m * nx,
-                                   y - half_width_m * ny, x, y]).reshape(-1, 3, 2)
-        pts = shapely.points(corners.reshape(-1, 2))
+        pts = _front_points(path, cum, s, half_width_m, ahead=True)
         last = len(s) - 1
         for line in lines:  # a foe whose path already passes within clear_m of the stop line runs beside it
             d = shapely.distance(line, pts).reshape(-1, 3).min(axis=1)
@@ -142,13 +136,7 @@ class RightOfWay:
         if not lines:
             return float(s_stop_m)
         s = np.arange(s_stop_m, max(s_stop_m - back_m, 0.0) - 1e-9, -0.25)
-        x, y = np.interp(s, cum, path[:, 0]), np.interp(s, cum, path[:, 1])
-        tx, ty = x - np.interp(s - 0.5, cum, path[:, 0]), y - np.interp(s - 0.5, cum, path[:, 1])
-        n = np.hypot(tx, ty)
-        nx, ny = -ty / np.maximum(n, 1e-9), tx / np.maximum(n, 1e-9)
-        corners = np.column_stack([x + half_width_m * nx, y + half_width_m * ny, x - half_width_m * nx,
-                                   y - half_width_m * ny, x, y]).reshape(-1, 3, 2)
-        pts = shapely.points(corners.reshape(-1, 2))
+        pts = _front_points(path, cum, s, half_width_m, ahead=False)
         d = np.min([shapely.distance(line, pts).reshape(-1, 3).min(axis=1) for line in lines], axis=0)
         ok = np.flatnonzero(d >= clear_m)
         return float(s[ok[0]]) if len(ok) else float(s_stop_m)
@@ -227,6 +215,22 @@ def link_state(conn) -> str:
 def _has_logic(node) -> bool:
     """Whether sumolib read a junction logic (``<request>`` rows) for ``node``."""
     return bool(getattr(node, "_prohibits", None))
+
+
+def _front_points(path, cum, s, half_width_m: float, ahead: bool):
+    """shapely points, 3 per arc length in ``s``: the front corners (left, right) and the front centre of a car
+    ``2 half_width_m`` wide whose front is on ``path`` there, along its tangent over the next (``ahead``) or the
+    last half metre."""
+    x, y = np.interp(s, cum, path[:, 0]), np.interp(s, cum, path[:, 1])
+    if ahead:
+        tx, ty = np.interp(s + 0.5, cum, path[:, 0]) - x, np.interp(s + 0.5, cum, path[:, 1]) - y
+    else:
+        tx, ty = x - np.interp(s - 0.5, cum, path[:, 0]), y - np.interp(s - 0.5, cum, path[:, 1])
+    n = np.hypot(tx, ty)
+    nx, ny = -ty / np.maximum(n, 1e-9), tx / np.maximum(n, 1e-9)
+    corners = np.column_stack([x + half_width_m * nx, y + half_width_m * ny, x - half_width_m * nx,
+                               y - half_width_m * ny, x, y])
+    return shapely.points(corners.reshape(-1, 2))
 
 
 def _crosses(a: LineString | None, b: LineString | None) -> bool:

@@ -76,7 +76,7 @@ class RouteLink:
         """Where the ego gives way to the link's foes: at a signalised link with an internal junction,
         there (SUMO's drivers enter on green and wait in the junction, and clear it when the light turns
         and the oncoming traffic stops); else at the stop line."""
-        return self.s_wait_m if self.tls and self.s_wait_m > self.s_stop_m else self.s_stop_m  # (s_hold_m: hold_line_m)
+        return self.s_wait_m if self.tls and self.s_wait_m > self.s_stop_m else self.s_stop_m
 
 
 @dataclass(frozen=True)

@@ -92,6 +92,11 @@ STOP, GO = "stop", "go"
 HELD_MPS = 2.0  # held at a line below this speed, the ego waits lined up with its lane, m/s
 
 
+def _brake_to(d_m: float, p: RulesParams) -> float:
+    """The speed from which the ego stops ``stop_margin_m`` before a line ``d_m`` ahead braking at b_comf."""
+    return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d_m - p.stop_margin_m, 0.0))
+
+
 def _direction(path, s_m: float) -> np.ndarray:
     """(2,) unit direction of the route path at arc length ``s_m`` (over the next metre)."""
     d = polyline_point_at(path, s_m + 1.0) - polyline_point_at(path, s_m)
@@ -214,7 +219,7 @@ class TrafficRulesLayer:
             if c in RED or e.yellow.get(k) == STOP:
                 # (the yellow's stop-or-go is judged at the stop line itself; the ego waits at the hold line)
                 hold = link.hold_line_m(e.s_m, v, p.commit_decel_mps2, p.stop_margin_m)
-                here = math.sqrt(2.0 * p.comfort_decel_mps2 * max(hold - e.s_m - p.stop_margin_m, 0.0))
+                here = _brake_to(hold - e.s_m, p)
                 if here < cap:
                     cap, line = here, link.s_stop_m
         return cap, line
@@ -235,17 +240,17 @@ class TrafficRulesLayer:
                 if v < p.stop_speed_mps and d - p.stop_margin_m <= p.stop_zone_m:
                     e.stopped[k] = snap.time_s  # stood at the sign: from now on it only gives way
                 elif not late:  # (at the line itself: the law's stop zone)
-                    return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d - p.stop_margin_m, 0.0)), link.s_stop_m
+                    return _brake_to(d, p), link.s_stop_m
             wide = e.wide.get(k)
             if (wide is not None and not late and d > 0 and
                     oncoming_first(wide, e.s_m, lanes, snap.lane_pos, snap.speed,
                                    (snap.time_s, p.standing_foe_wait_s, self._standing_since(snap)), row) < p.gap_margin_s):
-                return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d_hold - p.stop_margin_m, 0.0)), link.s_stop_m
+                return _brake_to(d_hold, p), link.s_stop_m
             if link.inside and d > 0 and not late:  # who is in the junction clears it first, on any link
                 clearing = clearing_arrivals(link.inside, lanes, snap.lane_pos, snap.speed, snap.length, {row})
                 if min(clearing, default=math.inf) < (ego_time_to_line(d, v, p.stop_margin_m) + critical_gap_s(link, p)
                                                        + p.gap_margin_s):
-                    return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d_hold - p.stop_margin_m, 0.0)), link.s_stop_m
+                    return _brake_to(d_hold, p), link.s_stop_m
             if not link.foes:
                 continue
             if link.yield_line_m > link.s_stop_m:  # a signalised turn waits at its internal junction
@@ -267,7 +272,7 @@ class TrafficRulesLayer:
                 t_slot = zipper_slot(t_e, arrivals, t_c + p.gap_margin_s, give)
                 return (math.inf, -1.0) if t_slot <= t_e else (max(d - p.stop_margin_m, 0.0) / t_slot, link.s_stop_m)
             if min(arrivals, default=math.inf) < t_e + t_c + p.gap_margin_s:
-                return math.sqrt(2.0 * p.comfort_decel_mps2 * max(d_hold - p.stop_margin_m, 0.0)), link.yield_line_m
+                return _brake_to(d_hold, p), link.yield_line_m
             return math.inf, -1.0  # the nearest yield line ahead is clear: the ones after it wait their turn
         return math.inf, -1.0
 
