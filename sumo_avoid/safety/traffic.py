@@ -156,6 +156,7 @@ class TrafficRulesLayer:
         self._turn_radius_m = float(getattr(ctx, "turn_radius_m", 0.0) or 0.0)  # 0: no drivable line, no wide exits
         self._crossings = CrossingRule(params)  # give way at pedestrian crossings, never stop on one
         self._crossing_yields: set[tuple[str, float]] = set()  # (ego, crossing entry s) where it held the ego
+        self._watching: set[str] = set()  # egos with anything on their route to enforce
 
     def add_ego(self, task: EgoTask) -> None:
         wide = wide_exits(task, self._turn_radius_m)
@@ -163,7 +164,9 @@ class TrafficRulesLayer:
         watch = (any(lk.tls or lk.foes or lk.inside or lk.state in STOP_SIGNS or lk.crossings for lk in task.links) or bool(wide)
                  or bool(narrow) or self.p.speed_factor is not None)
         exits = junction_exits(task) if task.lanes else ()
-        self._egos[task.vid] = _Ego(task, watch or any(x == x for x in exits), wide=wide, narrow=narrow, exits=exits)
+        self._egos[task.vid] = e = _Ego(task, watch or any(x == x for x in exits), wide=wide, narrow=narrow, exits=exits)
+        if e.watch:
+            self._watching.add(task.vid)
         self._allway |= any(lk.state == "w" and lk.foes for lk in task.links)
         self._foes |= any(lk.foes for lk in task.links) or bool(wide)
 
@@ -199,6 +202,7 @@ class TrafficRulesLayer:
 
     def remove_ego(self, vid: str) -> None:
         self._egos.pop(vid, None)
+        self._watching.discard(vid)
 
     def _signal_cap(self, e: _Ego, signals, v: float, length_m: float) -> tuple[float, float]:
         """(speed cap, s of the stop line that sets it) over the signals ahead."""
@@ -279,6 +283,8 @@ class TrafficRulesLayer:
     def filter(self, obs, command: np.ndarray) -> np.ndarray:
         snap = obs.snapshot
         out = np.array(command, dtype=float, copy=True)
+        if not self._watching and not (self._allway or self._foes):  # nothing to enforce, nothing to track (an arena)
+            return out
         lanes = None
         if self._allway or self._foes:
             self._track_standing(obs)

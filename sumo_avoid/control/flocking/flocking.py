@@ -40,8 +40,7 @@ from sumo_avoid.control.flocking.road_flock import RoadFlock
 from sumo_avoid.control.flocking.terms import (
     FlockingParams,
     combine,
-    pair_terms,
-    neighbour_pairs,
+    neighbour_terms,
     polygon_shills,
     segment_shills,
     shill,
@@ -78,7 +77,8 @@ class FlockingController(BaseController):
         elif ctx is not None and ctx.road is not None:
             self.road = RoadFlock(ctx.step_s)
         self._last_update = -np.inf
-        self._cache: dict[str, np.ndarray] = {}
+        self._cache: dict[str, np.ndarray] = {}  # ego id -> its last command (built from _last when needed)
+        self._last: tuple | None = None  # (ego ids, commands) of the last update
         self._obs_key = None
         self._obs_polys = None
         self.updates = 0
@@ -110,9 +110,15 @@ class FlockingController(BaseController):
         if self.road is not None:
             self.road.add(task)
 
+    def _cached(self) -> dict:
+        if self._last is not None:
+            ids, out = self._last
+            self._cache, self._last = {v: out[k] for k, v in enumerate(ids)}, None
+        return self._cache
+
     def remove_ego(self, vid: str) -> None:
         super().remove_ego(vid)
-        self._cache.pop(vid, None)
+        self._cached().pop(vid, None)
         if self.road is not None:
             self.road.remove(vid)
 
@@ -140,12 +146,11 @@ class FlockingController(BaseController):
         """
         p = self.p
         e = len(own_pos)
-        i, j, r = neighbour_pairs(own_pos, nb_pos, p.r_c_m, same=True, use_tree=e >= p.kdtree_min_agents)
         u, spd = unit_norm(own_vel)
         hd = np.column_stack([np.cos(heading), np.sin(heading)])
         u = np.where((spd > 1e-6)[:, None], u, hd)
         v = p.v_flock_mps * u
-        rep, fric = pair_terms(own_pos, nb_pos, own_vel, nb_vel, i, j, r, p, e)
+        rep, fric = neighbour_terms(own_pos, nb_pos, own_vel, nb_vel, p, use_tree=e >= p.kdtree_min_agents)
         v = v + rep + fric
         a, b, inward = self._walls
         if len(a):
@@ -166,8 +171,13 @@ class FlockingController(BaseController):
     def act(self, obs: Observation) -> np.ndarray:
         snap, p = obs.snapshot, self.p
         due = snap.time_s - self._last_update >= p.update_period_s - 1e-9
-        if not due and all(v in self._cache for v in obs.ego_ids):
-            return np.array([self._cache[v] for v in obs.ego_ids]).reshape(-1, 2)
+        if not due:  # between updates each ego keeps its last command
+            ids = tuple(obs.ego_ids)
+            if self._last is not None and ids == self._last[0]:
+                return np.array(self._last[1]).reshape(-1, 2)
+            cache = self._cached()
+            if all(v in cache for v in ids):
+                return np.array([cache[v] for v in ids]).reshape(-1, 2)
         rows = obs.ego_rows
         own_pos, own_vel, nb_pos, nb_vel = obs.v2v.states(snap, rows)
         others = None
@@ -187,7 +197,7 @@ class FlockingController(BaseController):
                                     snap.width[rows], nb_pos, nb_vel, groups)
         else:
             out = self.desired(own_pos, own_vel, snap.heading[rows], nb_pos, nb_vel, obs.obstacles, others)
-        self._cache = {v: out[k] for k, v in enumerate(obs.ego_ids)}
+        self._last, self._cache = (tuple(obs.ego_ids), out), {}
         self._last_update = snap.time_s
         self.updates += 1
         return out

@@ -19,12 +19,37 @@ _EPS = 1e-12  # as geometry.unit_norm's default: a vector no longer than this ha
 @njit(cache=True, error_model="numpy")
 def _braking_curve(r, a, p):
     """D(r, a, p) of core.curves.braking_curve_D for one value."""
-    lin = r * p
-    ap = a / p
-    sq = math.sqrt(max(2.0 * a * r - ap * ap, 0.0))
     if r <= 0:
         return 0.0
-    return lin if lin < ap else sq
+    lin = r * p
+    ap = a / p
+    return lin if lin < ap else math.sqrt(max(2.0 * a * r - ap * ap, 0.0))
+
+
+@njit(cache=True, error_model="numpy")
+def _add_pair(rep, fric, a, dx, dy, rk, ux, uy, r0_rep, p_rep, r0_frict, c_frict, v_frict, a_frict, p_frict):
+    """Add one pair's repulsion (positions differ by (dx, dy), distance rk) and friction (velocities differ by
+    (ux, uy)) to ego ``a``'s sums, operation for operation as the numpy terms."""
+    if rk < r0_rep:
+        nrm = math.hypot(dx, dy)
+        if nrm > _EPS:
+            m = p_rep * (r0_rep - rk)
+            rep[a, 0] += m * (dx / max(nrm, _EPS))
+            rep[a, 1] += m * (dy / max(nrm, _EPS))
+        else:  # bincount adds the 0 term too: +0.0 leaves the sum's bits (and a -0.0 start becomes +0.0)
+            rep[a, 0] += 0.0
+            rep[a, 1] += 0.0
+    vmax = max(v_frict, _braking_curve(rk - r0_frict, a_frict, p_frict))
+    if ux * ux + uy * uy < vmax * vmax * (1.0 - 1e-9):
+        return  # |v_i - v_j| surely <= vmax (hypot is within an ulp): no friction; adding its 0 changes no sum
+    vij = math.hypot(ux, uy)
+    m = -c_frict * (vij - vmax) if vij > vmax else 0.0
+    if vij > _EPS:
+        fric[a, 0] += m * (ux / max(vij, _EPS))
+        fric[a, 1] += m * (uy / max(vij, _EPS))
+    else:
+        fric[a, 0] += m * 0.0
+        fric[a, 1] += m * 0.0
 
 
 @njit(cache=True, error_model="numpy")
@@ -34,24 +59,62 @@ def pair_sums(pos_i, pos_j, vel_i, vel_j, i, j, r, n, r0_rep, p_rep, r0_frict, c
     fric = np.zeros((n, 2))
     for k in range(i.shape[0]):
         a, b, rk = i[k], j[k], r[k]
-        if rk < r0_rep:
-            dx, dy = pos_i[a, 0] - pos_j[b, 0], pos_i[a, 1] - pos_j[b, 1]
-            nrm = math.hypot(dx, dy)
-            if nrm > _EPS:
-                m = p_rep * (r0_rep - rk)
-                rep[a, 0] += m * (dx / max(nrm, _EPS))
-                rep[a, 1] += m * (dy / max(nrm, _EPS))
-            else:  # bincount adds the 0 term too: +0.0 leaves the sum's bits (and a -0.0 start becomes +0.0)
-                rep[a, 0] += 0.0
-                rep[a, 1] += 0.0
-        dx, dy = vel_i[a, 0] - vel_j[b, 0], vel_i[a, 1] - vel_j[b, 1]
-        vij = math.hypot(dx, dy)
-        vmax = max(v_frict, _braking_curve(rk - r0_frict, a_frict, p_frict))
-        m = -c_frict * (vij - vmax) if vij > vmax else 0.0
-        if vij > _EPS:
-            fric[a, 0] += m * (dx / max(vij, _EPS))
-            fric[a, 1] += m * (dy / max(vij, _EPS))
-        else:
-            fric[a, 0] += m * 0.0
-            fric[a, 1] += m * 0.0
+        _add_pair(rep, fric, a, pos_i[a, 0] - pos_j[b, 0], pos_i[a, 1] - pos_j[b, 1], rk,
+                  vel_i[a, 0] - vel_j[b, 0], vel_i[a, 1] - vel_j[b, 1], r0_rep, p_rep, r0_frict, c_frict, v_frict,
+                  a_frict, p_frict)
+    return rep, fric
+
+
+BLOCK = 16  # points per block of the neighbour search (cKDTree's default leaf size)
+
+
+@njit(cache=True, error_model="numpy")
+def _blocks(pts):
+    """Bounding boxes (B, 4: x0, y0, x1, y1) of consecutive runs of ``BLOCK`` points."""
+    nb = (pts.shape[0] + BLOCK - 1) // BLOCK
+    box = np.empty((nb, 4))
+    for b in range(nb):
+        lo, hi = b * BLOCK, min((b + 1) * BLOCK, pts.shape[0])
+        box[b, 0], box[b, 1] = pts[lo, 0], pts[lo, 1]
+        box[b, 2], box[b, 3] = pts[lo, 0], pts[lo, 1]
+        for k in range(lo + 1, hi):
+            box[b, 0], box[b, 1] = min(box[b, 0], pts[k, 0]), min(box[b, 1], pts[k, 1])
+            box[b, 2], box[b, 3] = max(box[b, 2], pts[k, 0]), max(box[b, 3], pts[k, 1])
+    return box
+
+
+@njit(cache=True, error_model="numpy")
+def tree_pair_sums(pos_i, pos_j, vel_i, vel_j, order_j, r_c, same, r0_rep, p_rep, r0_frict, c_frict, v_frict,
+                   a_frict, p_frict):
+    """:func:`pair_sums` over the neighbour pairs that ``cKDTree.sparse_distance_matrix`` finds within ``r_c``
+    (squared distance dx*dx + dy*dy <= r_c*r_c, r its square root; i != j when ``same``), found here and summed
+    in one pass. Each ego's terms are added in the order that search yields them (its neighbours j in the
+    order of ``order_j`` = ``cKDTree(pos_j).indices``, the tree's leaf order), so the sums are those of
+    ``pair_sums`` on its pairs: the points are taken in that order in blocks of ``BLOCK``, and a block whose
+    box lies farther than ``r_c`` from the ego is skipped."""
+    n, m = pos_i.shape[0], order_j.shape[0]
+    pts = np.empty((m, 2))
+    for k in range(m):
+        pts[k, 0], pts[k, 1] = pos_j[order_j[k], 0], pos_j[order_j[k], 1]
+    box = _blocks(pts)
+    ub = r_c * r_c
+    rep = np.zeros((n, 2))
+    fric = np.zeros((n, 2))
+    for a in range(n):
+        xa, ya = pos_i[a, 0], pos_i[a, 1]
+        for bk in range(box.shape[0]):
+            gx = max(box[bk, 0] - xa, 0.0, xa - box[bk, 2])
+            gy = max(box[bk, 1] - ya, 0.0, ya - box[bk, 3])
+            if gx * gx + gy * gy > ub * (1.0 + 1e-9):  # the box is out of reach (with room for rounding)
+                continue
+            for k in range(bk * BLOCK, min((bk + 1) * BLOCK, m)):
+                b = order_j[k]
+                if same and b == a:
+                    continue
+                dx, dy = xa - pos_j[b, 0], ya - pos_j[b, 1]
+                d2 = dx * dx + dy * dy
+                if d2 > ub:
+                    continue
+                _add_pair(rep, fric, a, dx, dy, math.sqrt(d2), vel_i[a, 0] - vel_j[b, 0], vel_i[a, 1] - vel_j[b, 1],
+                          r0_rep, p_rep, r0_frict, c_frict, v_frict, a_frict, p_frict)
     return rep, fric

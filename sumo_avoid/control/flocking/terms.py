@@ -10,7 +10,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 from scipy.spatial import cKDTree
 
-from sumo_avoid.control.flocking.pair_terms import pair_sums
+from sumo_avoid.control.flocking.pair_terms import pair_sums, tree_pair_sums
 from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.curves import braking_curve_D as D
 from sumo_avoid.core.geometry import unit_norm
@@ -133,6 +133,21 @@ def pair_terms(pos_i, pos_j, vel_i, vel_j, i, j, r, p: FlockingParams, n):
                      np.ascontiguousarray(vel_i, float), np.ascontiguousarray(vel_j, float),
                      np.asarray(i, np.int64), np.asarray(j, np.int64), np.asarray(r, float), n,
                      p.r0_rep_m, p.p_rep_ps, p.r0_frict_m, p.c_frict, p.v_frict_mps, p.a_frict_mps2, p.p_frict_ps)
+
+
+def neighbour_terms(pos_i, pos_j, vel_i, vel_j, p: FlockingParams, use_tree=False):
+    """(repulsion (n,2), friction (n,2)) over the neighbours within ``p.r_c_m`` (i != j): :func:`neighbour_pairs`
+    then :func:`pair_terms`; with ``use_tree`` the search and the sums are one compiled pass
+    (:func:`~sumo_avoid.control.flocking.pair_terms.tree_pair_sums`) that adds each ego's terms in the order
+    the cKDTree search yields them, so the sums are the same bits without the pair arrays."""
+    if not use_tree:
+        i, j, r = neighbour_pairs(pos_i, pos_j, p.r_c_m, same=True)
+        return pair_terms(pos_i, pos_j, vel_i, vel_j, i, j, r, p, len(pos_i))
+    pos_j = np.ascontiguousarray(pos_j, float)
+    return tree_pair_sums(np.ascontiguousarray(pos_i, float), pos_j, np.ascontiguousarray(vel_i, float),
+                          np.ascontiguousarray(vel_j, float), cKDTree(pos_j).indices.astype(np.int64, copy=False),
+                          float(p.r_c_m), True, p.r0_rep_m, p.p_rep_ps, p.r0_frict_m, p.c_frict, p.v_frict_mps,
+                          p.a_frict_mps2, p.p_frict_ps)
 
 
 def repulsion(pos_i, pos_j, i, j, r, p: FlockingParams, n):
