@@ -8,7 +8,7 @@ unreliable) and hands it back through :meth:`RelaxationActuator.held`. Parameter
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -77,7 +77,7 @@ class RelaxationActuator(HeldSpeed):
         vel = np.array(snap.vel)
         rows, w = zip(*known)
         vel[list(rows)] = np.array(w)
-        return replace(snap, vel=vel)
+        return snap.with_velocities(vel)
 
     def step(self, obs: Observation, command: np.ndarray) -> Motion:
         snap, rows, p = obs.snapshot, obs.ego_rows, self.p

@@ -6,6 +6,7 @@ SUMO's front-bumper position and compass angle are converted once, in :mod:`sumo
 """
 from __future__ import annotations
 
+import copy
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -80,6 +81,13 @@ class Snapshot:
         if not self._levels:
             return np.ones(len(rows), bool)
         return same_level(self.z[rows], self.z[row])
+
+    def with_velocities(self, vel) -> Snapshot:
+        """This snapshot with velocities ``vel`` (N, 2) (those the relaxation actuator holds); every other
+        field is shared, as it is immutable (``dataclasses.replace`` would check and copy them all again)."""
+        new = copy.copy(self)
+        object.__setattr__(new, "vel", _frozen(vel).reshape(self.n, 2))
+        return new
 
     @property
     def speed(self) -> np.ndarray:

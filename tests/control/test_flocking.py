@@ -97,6 +97,11 @@ def test_wall_shill_hand_values_and_outside():
     np.testing.assert_allclose(v[0], [0.0, 10.0 - math.sqrt(12.0)], atol=1e-12)
     np.testing.assert_allclose(v[1], [0.0, 6.0], atol=1e-12)  # outside: D = 0, full correction
     np.testing.assert_allclose(v[2], [0.0, 0.0], atol=1e-12)  # D(30) = sqrt(116) > 10: no term
+    # the compiled walls' term (the controller's) gives the same hand values, each vehicle alone or all at once
+    from sumo_avoid.control.flocking.terms import wall_shills
+
+    got = wall_shills(pos, vel, a, b, n, np.array([False, True, False]), p)
+    np.testing.assert_allclose(got, [[0.0, 10.0 - math.sqrt(12.0)], [0.0, 6.0], [0.0, 0.0]], atol=1e-12)
 
 
 def test_polygon_obstacle_shill_directions():

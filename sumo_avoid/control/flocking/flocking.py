@@ -42,8 +42,8 @@ from sumo_avoid.control.flocking.terms import (
     combine,
     neighbour_terms,
     polygon_shills,
-    segment_shills,
     shill,
+    wall_shills,
 )
 from sumo_avoid.core.geometry import (
     ccw_polygon,
@@ -154,8 +154,7 @@ class FlockingController(BaseController):
         v = v + rep + fric
         a, b, inward = self._walls
         if len(a):
-            dist, nrm = segment_shills(own_pos, a, b, inward, self.outside(own_pos))
-            v = v + shill(own_vel, dist, nrm, p)
+            v = v + wall_shills(own_pos, own_vel, a, b, inward, self.outside(own_pos), p)
         polys = self._static_polys(tuple(obstacles))
         if polys is not None:
             dist, nrm = polygon_shills(own_pos, polys)

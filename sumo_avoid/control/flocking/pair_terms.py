@@ -118,3 +118,36 @@ def tree_pair_sums(pos_i, pos_j, vel_i, vel_j, order_j, r_c, same, r0_rep, p_rep
                 _add_pair(rep, fric, a, dx, dy, math.sqrt(d2), vel_i[a, 0] - vel_j[b, 0], vel_i[a, 1] - vel_j[b, 1],
                           r0_rep, p_rep, r0_frict, c_frict, v_frict, a_frict, p_frict)
     return rep, fric
+
+
+@njit(cache=True, error_model="numpy")
+def wall_shill_sums(pos, vel, seg_a, seg_b, inward, outside, v_shill, r0_shill, a_shill, p_shill, normal_only):
+    """The shill term (eq. 7-8) of straight walls, summed per ego (E, 2): :func:`~sumo_avoid.control.
+    flocking.terms.segment_shills` then :func:`~sumo_avoid.control.flocking.terms.shill` in one loop,
+    operation for operation (each ego's sum starts from +0.0, as numpy's sum over the walls does)."""
+    e_n, s_n = pos.shape[0], seg_a.shape[0]
+    out = np.zeros((e_n, 2))
+    ap = a_shill / p_shill
+    for e in range(e_n):
+        for s in range(s_n):
+            dx, dy = seg_b[s, 0] - seg_a[s, 0], seg_b[s, 1] - seg_a[s, 1]
+            l2 = max(dx * dx + dy * dy, 1e-12)
+            t = min(max(((pos[e, 0] - seg_a[s, 0]) * dx + (pos[e, 1] - seg_a[s, 1]) * dy) / l2, 0.0), 1.0)
+            ox, oy = pos[e, 0] - (seg_a[s, 0] + t * dx), pos[e, 1] - (seg_a[s, 1] + t * dy)
+            dist = math.hypot(ox, oy)
+            if outside[e] and ox * inward[s, 0] + oy * inward[s, 1] < 0:
+                dist = 0.0
+            nx, ny = inward[s, 0], inward[s, 1]
+            vx, vy = v_shill * nx - vel[e, 0], v_shill * ny - vel[e, 1]
+            if normal_only:
+                k = vx * nx + vy * ny
+                vx, vy = k * nx, k * ny
+            v_is = math.hypot(vx, vy)
+            ux, uy = (vx / max(v_is, _EPS), vy / max(v_is, _EPS)) if v_is > _EPS else (0.0, 0.0)
+            r = dist - r0_shill
+            lin = r * p_shill
+            vmax = 0.0 if r <= 0 else (lin if lin < ap else math.sqrt(max(2.0 * a_shill * r - ap * ap, 0.0)))
+            mag = v_is - vmax if v_is > vmax else 0.0
+            out[e, 0] += mag * ux
+            out[e, 1] += mag * uy
+    return out

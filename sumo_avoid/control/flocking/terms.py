@@ -10,7 +10,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 from scipy.spatial import cKDTree
 
-from sumo_avoid.control.flocking.pair_terms import pair_sums, tree_pair_sums
+from sumo_avoid.control.flocking.pair_terms import pair_sums, tree_pair_sums, wall_shill_sums
 from sumo_avoid.core.config import field_doc
 from sumo_avoid.core.curves import braking_curve_D as D
 from sumo_avoid.core.geometry import unit_norm
@@ -184,6 +184,15 @@ def shill(vel, dist, normal, p: FlockingParams, v_obj=None):
     vmax = D(dist - p.r0_shill_m, p.a_shill_mps2, p.p_shill_ps)
     mag = np.where(v_is > vmax, v_is - vmax, 0.0)
     return (mag[..., None] * u).sum(axis=1)
+
+
+def wall_shills(pos, vel, seg_a, seg_b, inward, outside, p: FlockingParams):
+    """``shill(vel, *segment_shills(pos, seg_a, seg_b, inward, outside), p)`` in one compiled loop
+    (:func:`~sumo_avoid.control.flocking.pair_terms.wall_shill_sums`, the same values). (E, 2) m/s."""
+    return wall_shill_sums(np.ascontiguousarray(pos, float), np.ascontiguousarray(vel, float),
+                           np.ascontiguousarray(seg_a, float), np.ascontiguousarray(seg_b, float),
+                           np.ascontiguousarray(inward, float), np.ascontiguousarray(outside, bool),
+                           p.v_shill_mps, p.r0_shill_m, p.a_shill_mps2, p.p_shill_ps, bool(p.shill_normal_only))
 
 
 def segment_shills(pos, seg_a, seg_b, inward, outside):
