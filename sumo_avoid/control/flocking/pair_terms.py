@@ -16,7 +16,7 @@ from numba import njit
 _EPS = 1e-12  # as geometry.unit_norm's default: a vector no longer than this has no direction
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _braking_curve(r, a, p):
     """D(r, a, p) of core.curves.braking_curve_D for one value."""
     if r <= 0:
@@ -26,30 +26,30 @@ def _braking_curve(r, a, p):
     return lin if lin < ap else math.sqrt(max(2.0 * a * r - ap * ap, 0.0))
 
 
-@njit(cache=True, error_model="numpy")
-def _add_pair(rep, fric, a, dx, dy, rk, ux, uy, r0_rep, p_rep, r0_frict, c_frict, v_frict, a_frict, p_frict):
-    """Add one pair's repulsion (positions differ by (dx, dy), distance rk) and friction (velocities differ by
-    (ux, uy)) to ego ``a``'s sums, operation for operation as the numpy terms."""
+@njit(cache=True, error_model="numpy", inline="always")
+def _pair(dx, dy, rk, ux, uy, r0_rep, p_rep, r0_frict, c_frict, v_frict, a_frict, p_frict):
+    """One pair's repulsion (positions differ by (dx, dy), distance rk) and friction (velocities differ by
+    (ux, uy)), operation for operation as the numpy terms: (rx, ry, fx, fy, what) where ``what`` says which
+    to add (1: repulsion, 2: friction; a term not added is 0 and would change no sum). Scalars only: a helper
+    that took the sum arrays cost ~5x the whole loop (numba counts references to arrays passed in)."""
+    what, rx, ry, fx, fy = 0, 0.0, 0.0, 0.0, 0.0
     if rk < r0_rep:
+        what = 1
         nrm = math.hypot(dx, dy)
         if nrm > _EPS:
             m = p_rep * (r0_rep - rk)
-            rep[a, 0] += m * (dx / max(nrm, _EPS))
-            rep[a, 1] += m * (dy / max(nrm, _EPS))
-        else:  # bincount adds the 0 term too: +0.0 leaves the sum's bits (and a -0.0 start becomes +0.0)
-            rep[a, 0] += 0.0
-            rep[a, 1] += 0.0
+            rx, ry = m * (dx / max(nrm, _EPS)), m * (dy / max(nrm, _EPS))
+        # else: bincount adds the 0 term too (+0.0 leaves the sum's bits; a -0.0 start becomes +0.0)
     vmax = max(v_frict, _braking_curve(rk - r0_frict, a_frict, p_frict))
     if ux * ux + uy * uy < vmax * vmax * (1.0 - 1e-9):
-        return  # |v_i - v_j| surely <= vmax (hypot is within an ulp): no friction; adding its 0 changes no sum
+        return rx, ry, fx, fy, what  # |v_i - v_j| surely <= vmax (hypot is within an ulp): no friction to add
     vij = math.hypot(ux, uy)
     m = -c_frict * (vij - vmax) if vij > vmax else 0.0
     if vij > _EPS:
-        fric[a, 0] += m * (ux / max(vij, _EPS))
-        fric[a, 1] += m * (uy / max(vij, _EPS))
+        fx, fy = m * (ux / max(vij, _EPS)), m * (uy / max(vij, _EPS))
     else:
-        fric[a, 0] += m * 0.0
-        fric[a, 1] += m * 0.0
+        fx, fy = m * 0.0, m * 0.0
+    return rx, ry, fx, fy, what | 2
 
 
 @njit(cache=True, error_model="numpy")
@@ -59,9 +59,13 @@ def pair_sums(pos_i, pos_j, vel_i, vel_j, i, j, r, n, r0_rep, p_rep, r0_frict, c
     fric = np.zeros((n, 2))
     for k in range(i.shape[0]):
         a, b, rk = i[k], j[k], r[k]
-        _add_pair(rep, fric, a, pos_i[a, 0] - pos_j[b, 0], pos_i[a, 1] - pos_j[b, 1], rk,
-                  vel_i[a, 0] - vel_j[b, 0], vel_i[a, 1] - vel_j[b, 1], r0_rep, p_rep, r0_frict, c_frict, v_frict,
-                  a_frict, p_frict)
+        rx, ry, fx, fy, what = _pair(pos_i[a, 0] - pos_j[b, 0], pos_i[a, 1] - pos_j[b, 1], rk,
+                                     vel_i[a, 0] - vel_j[b, 0], vel_i[a, 1] - vel_j[b, 1],
+                                     r0_rep, p_rep, r0_frict, c_frict, v_frict, a_frict, p_frict)
+        if what & 1:
+            rep[a, 0], rep[a, 1] = rep[a, 0] + rx, rep[a, 1] + ry
+        if what & 2:
+            fric[a, 0], fric[a, 1] = fric[a, 0] + fx, fric[a, 1] + fy
     return rep, fric
 
 
@@ -115,8 +119,13 @@ def tree_pair_sums(pos_i, pos_j, vel_i, vel_j, order_j, r_c, same, r0_rep, p_rep
                 d2 = dx * dx + dy * dy
                 if d2 > ub:
                     continue
-                _add_pair(rep, fric, a, dx, dy, math.sqrt(d2), vel_i[a, 0] - vel_j[b, 0], vel_i[a, 1] - vel_j[b, 1],
-                          r0_rep, p_rep, r0_frict, c_frict, v_frict, a_frict, p_frict)
+                rx, ry, fx, fy, what = _pair(dx, dy, math.sqrt(d2), vel_i[a, 0] - vel_j[b, 0],
+                                             vel_i[a, 1] - vel_j[b, 1],
+                                             r0_rep, p_rep, r0_frict, c_frict, v_frict, a_frict, p_frict)
+                if what & 1:  # (the same two additions as pair_sums above)
+                    rep[a, 0], rep[a, 1] = rep[a, 0] + rx, rep[a, 1] + ry
+                if what & 2:
+                    fric[a, 0], fric[a, 1] = fric[a, 0] + fx, fric[a, 1] + fy
     return rep, fric
 
 
