@@ -60,6 +60,7 @@ class RelaxationActuator(HeldSpeed):
         super().__init__()
         self.p, self.dt, self.rng = params, ctx.step_s, ctx.rng(7)
         self._vel: dict[str, np.ndarray] = {}  # ego id -> 2-D velocity it holds, m/s
+        self._last: tuple = ((), np.zeros((0, 2)))  # the last step's egos and their velocities (rows of _vel's)
 
     @staticmethod
     def steering(params: RelaxationParams) -> tuple[float, float]:
@@ -71,12 +72,19 @@ class RelaxationActuator(HeldSpeed):
         self._vel.pop(vid, None)
 
     def held(self, snap: Snapshot) -> Snapshot:
-        known = [(snap.index[v], w) for v, w in self._vel.items() if v in snap.index]
-        if not known:
-            return snap
+        ids, last = self._last
+        index = snap.index
+        held = self._vel
+        if len(ids) == len(held) and all(v in held and v in index for v in ids):  # all held moved in the last step
+            rows, w = [index[v] for v in ids], last
+        else:
+            known = [(index[v], w) for v, w in held.items() if v in index]
+            if not known:
+                return snap
+            rows, w = zip(*known)
+            rows, w = list(rows), np.array(w)
         vel = np.array(snap.vel)
-        rows, w = zip(*known)
-        vel[list(rows)] = np.array(w)
+        vel[rows] = w
         return snap.with_velocities(vel)
 
     def step(self, obs: Observation, command: np.ndarray) -> Motion:
@@ -85,5 +93,6 @@ class RelaxationActuator(HeldSpeed):
         pos, vel, head, speed = relaxation_step(snap.pos[rows], snap.vel[rows], snap.heading[rows], command,
                                                 p.tau_s, p.max_accel_mps2, self.dt, kick)
         self._vel.update(zip(obs.ego_ids, vel))
+        self._last = (tuple(obs.ego_ids), vel)
         self._speed.update(zip(obs.ego_ids, speed.tolist()))
         return Motion(pos, head, speed)

@@ -38,14 +38,14 @@ class DampedRandomWalk:
 
     def step(self, keys, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
         """Advance the walks of ``keys`` (new keys start at 0) by dt_s; return their (x, u), (n, 2)."""
-        if keys != self._keys:  # the rows of the last call's keys are kept (a flock's keys rarely change)
+        if keys is not self._keys and keys != self._keys:  # the last call's keys keep their rows
             new = [k for k in keys if k not in self._row]
             for k in new:
                 self._row[k] = len(self._row)
             if new:
                 self.x = np.concatenate([self.x, np.zeros((len(new), 2))])
                 self.u = np.concatenate([self.u, np.zeros((len(new), 2))])
-            self._keys, self._r = list(keys), np.array([self._row[k] for k in keys], dtype=int)
+            self._keys, self._r = keys, np.array([self._row[k] for k in keys], dtype=int)
         r = self._r
         xi = self.rng.normal(0.0, 1.0, (len(r), 2))
         x, u = self.x[r], self.u[r]

@@ -35,6 +35,8 @@ class V2VLink:
         self._history: collections.deque = collections.deque()
         self._gps: DampedRandomWalk | None = None
         self._gps_time = -math.inf
+        self._gps_keys: list = []  # the walks' keys for the rows of (ids, rows) in _keys_for
+        self._keys_for: tuple = (None, None)
 
     def states(self, snap: Snapshot, rows_now: np.ndarray):
         """Own state now, neighbours' state delay_s ago (+ noise); rows aligned with ``rows_now``."""
@@ -55,10 +57,13 @@ class V2VLink:
         if p.gps_sigma_m2ps2 > 0:  # the reference simulator's drifting GPS error (core.noise)
             if self._gps is None:
                 self._gps = DampedRandomWalk(p.gps_sigma_m2ps2, p.gps_lambda_ps, self.rng)
-            keys = [snap.ids[r] for r in rows_now]
+            if not (snap.ids is self._keys_for[0] and np.array_equal(rows_now, self._keys_for[1])):
+                keys = [snap.ids[r] for r in rows_now]  # (the same list while the rows do not change)
+                self._gps_keys = [(k, 0) for k in keys] + [(k, 1) for k in keys]
+                self._keys_for = (snap.ids, rows_now.copy())
             dt = max(p.update_period_s, snap.time_s - self._gps_time if math.isfinite(self._gps_time) else 0.0)
             self._gps_time = snap.time_s
-            x, u = self._gps.step([(k, 0) for k in keys] + [(k, 1) for k in keys], dt)
+            x, u = self._gps.step(self._gps_keys, dt)
             e = len(rows_now)
             own_pos, own_vel, nb_pos, nb_vel = own_pos + x[:e], own_vel + u[:e], nb_pos + x[e:], nb_vel + u[e:]
         if p.pos_noise_m > 0 or p.vel_noise_mps > 0:
