@@ -133,7 +133,7 @@ def paired(scn_path, sets, moves, n_agents: int, chunk: int) -> tuple[float, flo
         job = pathlib.Path(tmp) / "job.pkl"
         job.write_bytes(pickle.dumps((str(scn_path), sets, moves)))
         cpu = max(os.sched_getaffinity(0))
-        r = interleaved(job, cpu, chunk, len(moves), False, sides=("plain", "plugin"), run_side=turn_side)
+        r = interleaved(job, cpu, chunk, len(moves) + 1, False, sides=("plain", "plugin"), run_side=turn_side)
     pl, pg = r["plain"], r["plugin"]
     print(paired_turns(pl["turns_s"], pg["turns_s"]))
     own = 1e6 * (pg["busy_s"] - pl["busy_s"]) / max(pg["steps"] * n_agents, 1)

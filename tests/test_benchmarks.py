@@ -162,3 +162,19 @@ def test_replay_record_benchmark_prints_its_share():
     assert out.returncode == 0, out.stderr
     assert re.fullmatch(r"max_share=\d\.\d{5}", out.stdout.strip().splitlines()[-1])
     assert "crash_straight: run " in out.stdout
+
+
+def test_arena_benchmark_replays_the_run_taking_turns():
+    """``benchmarks/arena.py --turns``: the run again and the replay of its recorded poses as two processes taking
+    turns; both sides step as often (the spawn step and 19 more), and the last line is the ratio's."""
+    out = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "arena.py"), "--agents", "5", "--duration", "4",
+                          "--repeat", "1", "--skip-neighbours", "--turns", "--chunk", "3"],
+                         capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.strip().splitlines()
+    m = re.match(r"^wall_s=(\d+\.\d\d) plain_s=(\d+\.\d\d) ratio=(\d+\.\d\d)$", lines[-1])
+    assert m, lines[-1]
+    assert float(m.group(1)) > 0 and float(m.group(2)) > 0
+    assert "arena run: N=5 4 s, 20 steps" in out.stdout
+    assert re.search(r"paired turns \(6, same steps\): plug-in / plain median \d+\.\d{3}", out.stdout), out.stdout
+    assert "steps: plain 20/20  plugin 20/20" in out.stderr
