@@ -82,3 +82,27 @@ def test_a_stop_wish_with_a_direction_brakes_and_steers_that_way():
     for ang in (0.2, 3.0):
         m = actuate([[0.0, 0.0]], [0.0], [0.0], 1e-4 * np.array([[math.cos(ang), math.sin(ang)]]), KinematicParams(), 0.1)
         assert (m.speed[0], m.heading[0], *m.pos[0]) == (0.0, 0.0, 0.0, 0.0)
+
+
+def test_relaxation_holds_each_egos_velocity_and_forgets_a_removed_one():
+    """The relaxation actuator hands the next snapshot the velocities it set (SUMO keeps a moved vehicle's speed
+    along its heading only): its egos' rows change, every other row and field stays; a removed ego is SUMO's again."""
+    import types
+
+    from sumo_avoid.actuation.relaxation import RelaxationActuator, RelaxationParams
+    from sumo_avoid.core.snapshot import Snapshot
+    from sumo_avoid.core.types import Observation
+
+    ctx = types.SimpleNamespace(step_s=0.5, rng=lambda k: np.random.default_rng(k))
+    act = RelaxationActuator(RelaxationParams(tau_s=1.0, max_accel_mps2=100.0), ctx)
+    snap = Snapshot(0.0, ("a", "car", "b"), np.array([[0.0, 0.0], [5.0, 5.0], [10.0, 0.0]]),
+                    np.array([[1.0, 0.0], [3.0, 0.0], [0.0, 2.0]]), np.zeros(3), np.full(3, 4.0), np.full(3, 2.0),
+                    np.array([True, False, True]))
+    obs = Observation(snap, ("a", "b"), np.array([0, 2]), np.array([1.0, 2.0]))
+    act.step(obs, np.array([[3.0, 0.0], [0.0, 4.0]]))  # v += (v_des - v) dt / tau: a (2, 0), b (0, 3)
+    held = act.held(snap)
+    np.testing.assert_allclose(held.vel, [[2.0, 0.0], [3.0, 0.0], [0.0, 3.0]])
+    assert held.ids == snap.ids and held.pos is snap.pos and held.index == snap.index and snap.vel[0, 0] == 1.0
+    assert not held.vel.flags.writeable
+    act.remove_ego("a")  # taken out (its goal): its row is SUMO's again, b's is still held
+    np.testing.assert_allclose(act.held(snap).vel, [[1.0, 0.0], [3.0, 0.0], [0.0, 3.0]])

@@ -59,3 +59,17 @@ def test_velocity_kick_spread():
     assert k.shape == (200_000, 2)
     assert k.std() == pytest.approx(math.sqrt(2 * 0.2 * 0.2), rel=0.01)  # 0.2828 m/s per step
     assert abs(k.mean()) < 3 * 0.2828 / math.sqrt(k.size)
+
+
+def test_damped_random_walk_follows_its_keys_when_their_order_changes():
+    """The rows of the last call's keys are kept (a flock's keys rarely change); keys given in another order, or
+    the same list again, still step each key's own walk: b's second step is a's first, mirrored."""
+    w = DampedRandomWalk(0.005, 0.1, _Fixed([[1.0, 1.0], [0.0, 0.0]], [[1.0, 1.0], [0.0, 0.0]],
+                                           [[0.0, 0.0], [0.0, 0.0]]))
+    keys = ["a", "b"]
+    x1, u1 = w.step(keys, 0.2)  # a kicked, b not
+    x2, u2 = w.step(["b", "a"], 0.2)  # now b (first row) kicked, a not: rows follow the keys
+    np.testing.assert_allclose(u2[0], u1[0], rtol=1e-12)  # b's first kick is a's first kick
+    assert u2[1, 0] == pytest.approx(0.0141421356 * (1 - 0.02) - 0.0105409255 * 0.0028284271 * 0.2)
+    x3, u3 = w.step(keys, 0.2)  # the first list object again: a's third step, b's second
+    assert u3[1, 0] == pytest.approx(0.0141421356 * (1 - 0.02) - 0.0105409255 * 0.0028284271 * 0.2)
