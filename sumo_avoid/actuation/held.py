@@ -23,4 +23,6 @@ class HeldSpeed:
 
     def speeds(self, snap: Snapshot, ego_ids) -> np.ndarray:
         held = np.array([self._speed[v] for v in ego_ids])
+        if not np.isnan(held).any():  # every ego moved already (SUMO's speeds are needed only before that)
+            return held
         return np.where(np.isnan(held), snap.speed[[snap.index[v] for v in ego_ids]], held)
