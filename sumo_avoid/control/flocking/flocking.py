@@ -77,8 +77,7 @@ class FlockingController(BaseController):
         elif ctx is not None and ctx.road is not None:
             self.road = RoadFlock(ctx.step_s)
         self._last_update = -np.inf
-        self._cache: dict[str, np.ndarray] = {}  # ego id -> its last command (built from _last when needed)
-        self._last: tuple | None = None  # (ego ids, commands) of the last update
+        self._last: tuple = ((), np.zeros((0, 2)))  # (ego ids, commands) of the last update
         self._obs_key = None
         self._obs_polys = None
         self.updates = 0
@@ -110,15 +109,12 @@ class FlockingController(BaseController):
         if self.road is not None:
             self.road.add(task)
 
-    def _cached(self) -> dict:
-        if self._last is not None:
-            ids, out = self._last
-            self._cache, self._last = {v: out[k] for k, v in enumerate(ids)}, None
-        return self._cache
-
     def remove_ego(self, vid: str) -> None:
         super().remove_ego(vid)
-        self._cached().pop(vid, None)
+        ids, out = self._last
+        if vid in ids:  # its command is forgotten; the others keep theirs
+            keep = [k for k, v in enumerate(ids) if v != vid]
+            self._last = (tuple(ids[k] for k in keep), out[keep])
         if self.road is not None:
             self.road.remove(vid)
 
@@ -171,12 +167,12 @@ class FlockingController(BaseController):
         snap, p = obs.snapshot, self.p
         due = snap.time_s - self._last_update >= p.update_period_s - 1e-9
         if not due:  # between updates each ego keeps its last command
-            ids = tuple(obs.ego_ids)
-            if self._last is not None and ids == self._last[0]:
-                return np.array(self._last[1]).reshape(-1, 2)
-            cache = self._cached()
-            if all(v in cache for v in ids):
-                return np.array([cache[v] for v in ids]).reshape(-1, 2)
+            ids, (last_ids, last) = tuple(obs.ego_ids), self._last
+            if ids == last_ids:
+                return np.array(last).reshape(-1, 2)
+            row = {v: k for k, v in enumerate(last_ids)}
+            if all(v in row for v in ids):
+                return np.array([last[row[v]] for v in ids]).reshape(-1, 2)
         rows = obs.ego_rows
         own_pos, own_vel, nb_pos, nb_vel = obs.v2v.states(snap, rows)
         others = None
@@ -196,7 +192,7 @@ class FlockingController(BaseController):
                                     snap.width[rows], nb_pos, nb_vel, groups)
         else:
             out = self.desired(own_pos, own_vel, snap.heading[rows], nb_pos, nb_vel, obs.obstacles, others)
-        self._last, self._cache = (tuple(obs.ego_ids), out), {}
+        self._last = (tuple(obs.ego_ids), out)
         self._last_update = snap.time_s
         self.updates += 1
         return out

@@ -136,7 +136,6 @@ def wall_shill_sums(pos, vel, seg_a, seg_b, inward, outside, v_shill, r0_shill, 
     operation for operation (each ego's sum starts from +0.0, as numpy's sum over the walls does)."""
     e_n, s_n = pos.shape[0], seg_a.shape[0]
     out = np.zeros((e_n, 2))
-    ap = a_shill / p_shill
     for e in range(e_n):
         for s in range(s_n):
             dx, dy = seg_b[s, 0] - seg_a[s, 0], seg_b[s, 1] - seg_a[s, 1]
@@ -153,9 +152,7 @@ def wall_shill_sums(pos, vel, seg_a, seg_b, inward, outside, v_shill, r0_shill, 
                 vx, vy = k * nx, k * ny
             v_is = math.hypot(vx, vy)
             ux, uy = (vx / max(v_is, _EPS), vy / max(v_is, _EPS)) if v_is > _EPS else (0.0, 0.0)
-            r = dist - r0_shill
-            lin = r * p_shill
-            vmax = 0.0 if r <= 0 else (lin if lin < ap else math.sqrt(max(2.0 * a_shill * r - ap * ap, 0.0)))
+            vmax = _braking_curve(dist - r0_shill, a_shill, p_shill)
             mag = v_is - vmax if v_is > vmax else 0.0
             out[e, 0] += mag * ux
             out[e, 1] += mag * uy
