@@ -21,6 +21,7 @@ import importlib  # noqa: E402
 import json  # noqa: E402
 import pathlib  # noqa: E402
 import sys  # noqa: E402
+import tempfile  # noqa: E402
 import traceback  # noqa: E402
 
 from sumo_avoid.core.config import ScenarioError  # noqa: E402
@@ -84,6 +85,8 @@ def run(message: dict) -> int:
     die_with_parent()
     if os.getppid() != message["parent"]:  # the parent died before prctl took effect
         return 3
+    if message.get("scratch"):  # the parent removes it after this process, however it ends
+        tempfile.tempdir = message["scratch"]
     job = RunJob.from_json(message["job"])
     out = pathlib.Path(job.out_dir)
 

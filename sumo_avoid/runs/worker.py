@@ -38,6 +38,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 import uuid
@@ -146,17 +147,31 @@ def run_in(tmp: pathlib.Path, job: RunJob, timeout_s: float = math.inf, start: s
     tmp = pathlib.Path(tmp).absolute()
     job = dataclasses.replace(job, out_dir=str(tmp))
     started, t0 = now(), time.perf_counter()
+    scratch = _scratch()
     message = {"job": job.to_json(), "id": tmp.name, "timeout_s": timeout_s, "parent": os.getpid(),
-               "crash": faults.crash_for(job)}  # each start adds "dispatch_wall" as it hands the run over
-    if start == "fork":
-        status = _run_forked(message, timeout_s)
-    elif start == "spawn":
-        status = _run_spawned(message, tmp, timeout_s)
-    else:
-        status = _run_here(message, timeout_s, poll, every_s)
+               "crash": faults.crash_for(job), "scratch": scratch}  # each start adds "dispatch_wall" as it hands the run over
+    try:
+        if start == "fork":
+            status = _run_forked(message, timeout_s)
+        elif start == "spawn":
+            status = _run_spawned(message, tmp, timeout_s)
+        else:
+            status = _run_here(message, timeout_s, poll, every_s)
+    finally:  # the child's temporary files (SUMO's SSM output, rewritten route files) go even when it was killed
+        if scratch is not None:
+            shutil.rmtree(scratch, ignore_errors=True)
     res = outcome_of(tmp, status, timeout_s)
     return dataclasses.replace(res, started_at=started, ended_at=now(), wall_s=time.perf_counter() - t0, start=start,
                                clock_s=dict(res.clock_s, ended_wall=time.time()))
+
+
+def _scratch() -> str | None:
+    """A fresh folder for the child's temporary files, removed by the parent once the child has ended (a child
+    killed by a signal or a timeout cannot clean up after itself); None (the system's default) if none can be made."""
+    try:
+        return tempfile.mkdtemp(prefix="sumo-avoid-scratch-")
+    except OSError:
+        return None
 
 
 def outcome_of(tmp: pathlib.Path, status: dict, timeout_s: float) -> RunOutcome:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import sqlite3
+import tempfile
 
 import pytest
 from conftest import ROOT, cli_in_process
@@ -42,6 +43,19 @@ def test_run_segfault_mid_run_exits_3_and_the_log_is_kept(tmp_path, monkeypatch)
     r = cli_in_process("run", SCN, "--out", out, *SHORT)
     _crashed(r, out)
     assert "Simulation" in (out / "sumo.log").read_text() or (out / "sumo.log").stat().st_size >= 0
+
+
+def test_a_run_killed_mid_run_leaves_no_temporary_files(tmp_path, monkeypatch):
+    """The run's SSM output and rewritten files live in a folder the parent removes after the child: a child
+    killed by SIGSEGV (or a timeout) left its ``sumo-avoid-run-*`` folder in the system's temp folder for good."""
+    sys_tmp = tmp_path / "sys_tmp"
+    sys_tmp.mkdir()
+    monkeypatch.setenv("TMPDIR", str(sys_tmp))
+    monkeypatch.setattr(tempfile, "tempdir", str(sys_tmp))
+    monkeypatch.setenv(faults.ENV, "segfault_mid_run:*")  # test-only fault injection
+    r = cli_in_process("run", SCN, "--out", tmp_path / "out", *SHORT)
+    _crashed(r, tmp_path / "out")
+    assert list(sys_tmp.iterdir()) == []
 
 
 def _batch(tmp_path, runs: str):
