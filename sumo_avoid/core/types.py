@@ -25,7 +25,7 @@ class EgoTask:
     path: np.ndarray  # (P, 2) reference polyline along the ego's route, m
     cruise_speed_mps: float
     links: tuple[RouteLink, ...] = ()  # junction links along the path, in route order
-    speed_limits: np.ndarray | None = None  # (K, 2) [s where a lane piece starts, its speed limit], m, m/s
+    speed_limits: np.ndarray | None = None  # (K, 2 or 3) [s where a lane piece starts, its speed limit, 1: internal lane], m, m/s
     lanes: tuple[LanePiece, ...] = ()  # the path's lane pieces, in route order
     width_m: float = 1.8  # the ego's width (SUMO's vehicle type), m
     length_m: float = 5.0  # ... and length, m

@@ -18,9 +18,11 @@ class RulesParams:
     comfort_decel_mps2: float = field_doc(3.0, positive=True, doc="b_comf: comfortable braking for signals "
                                                                    "and the road ahead, m/s^2 (SPEC §5)")
     stop_margin_m: float = field_doc(1.0, doc="stop the front bumper this far before a stop line, m")
-    speed_factor: float | None = field_doc(None, positive=True,
-                                           doc="lane speed limit x this = highest speed; default: not enforced "
-                                               "(docs: enforcing it stalls APF-SA on left_turn today)")
+    speed_limits: bool = field_doc(True, doc="keep the legal speed limits of the route's lanes (normal lanes, x "
+                                              "speed_factor; false: none)")
+    speed_factor: float = field_doc(1.0, positive=True, doc="lane speed limit x this = highest speed")
+    turn_speeds: bool = field_doc(False, doc="also keep the speeds of junctions' internal lanes (netconvert's turning "
+                                             "speeds, no legal limit; the controllers keep their own curve speed)")
     lookahead_m: float = field_doc(250.0, positive=True, doc="signals and speed limits this far ahead count, m")
     critical_gap_s: float = field_doc(4.5, positive=True, doc="t_c: a foe with priority must arrive at the conflict "
                                                                "point at least this long after the ego reaches the "

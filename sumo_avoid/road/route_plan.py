@@ -29,7 +29,7 @@ class RoutePlan(NamedTuple):
 
     path: np.ndarray  # (P, 2) reference polyline, m
     links: tuple[RouteLink, ...]  # junction links passed, in route order
-    speed_limits: np.ndarray  # (K, 2) [s where a lane piece starts, its speed limit], m, m/s
+    speed_limits: np.ndarray  # (K, 3) [s where a lane piece starts, its speed limit, 1 if a junction's internal lane], m, m/s
     lanes: tuple[LanePiece, ...]  # lane pieces of the path
 
 
@@ -142,7 +142,8 @@ class RoutePlanner:
               vclass: str | None = None) -> RoutePlan:
         """Reference polyline (P,2) along consecutive normal edges, joined by internal lanes, and
         the junction links it passes (:class:`RouteLink`: stop line arc length, signal, right of way),
-        the speed limits along it ((K, 2): arc length where a lane piece starts, its speed, m/s) and
+        the speed limits along it ((K, 3): arc length where a lane piece starts, its speed, m/s, and 1 where
+        the piece is a junction's internal lane, whose speed is netconvert's turning speed, no legal limit) and
         its lane pieces (:class:`LanePiece`: edge, lane, where the edge's other lanes lie across it).
 
         On every edge one lane is used that has a connection to the next edge (the one
@@ -158,7 +159,7 @@ class RoutePlanner:
             raise ValueError("empty route")
         pieces: list[np.ndarray] = []
         link_at: list[tuple[object, int]] = []  # (connection, points before its stop line)
-        limit_at: list[tuple[float, int]] = []  # (speed limit, points before its lane piece)
+        limit_at: list[tuple[float, int, float]] = []  # (speed limit, points before its lane piece, 1: a turning speed)
         piece_at: list[tuple] = []  # (edge, lane, offsets at start, offsets at end, widths, allowed, (opposite width, lane), points before it)
         entry = depart_lane
         for k, e in enumerate(edges):
@@ -169,7 +170,7 @@ class RoutePlanner:
                 n_points = sum(len(piece) for piece in pieces)
                 link_at.append((conn, n_points))
                 for lane, shape, speed in self._via_lanes(conn):
-                    limit_at.append((speed, n_points))
+                    limit_at.append((speed, n_points, 1.0))
                     piece_at.append((lane.getEdge().getID(), lane.getIndex(), (0.0,), (0.0,),
                                      (float(lane.getWidth()),), (), (0.0, ""), n_points))
                     pieces.append(shape)
@@ -209,7 +210,7 @@ class RoutePlanner:
                                                   sorted(lanes, key=lambda ln: ln.getIndex()))
         entry_idx = exit_idx if entry is None else int(np.clip(entry, 0, len(lanes) - 1))
         exit_shape = np.asarray(lanes[exit_idx].getShape(), float)
-        limit_at.append((float(lanes[exit_idx].getSpeed()), n_points))
+        limit_at.append((float(lanes[exit_idx].getSpeed()), n_points, 0.0))
         widths, centres = _lane_centres(lanes)
         exit_off = tuple((centres - centres[exit_idx]).tolist())
         opp = _opposite(e, vclass)
@@ -238,7 +239,7 @@ class RoutePlanner:
             return float(cum[kept_before[n] - 1]) if kept_before[n] else 0.0
 
         links = tuple(self._link(conn, s_at(n), path, cum) for conn, n in link_at)
-        limits = np.array([(s_at(n), v) for v, n in limit_at], float).reshape(-1, 2)
+        limits = np.array([(s_at(n), v, turn) for v, n, turn in limit_at], float).reshape(-1, 3)
         starts = [s_at(n) for *_, n in piece_at]
         ends = starts[1:] + [float(cum[-1])]
         lane_pieces = tuple(LanePiece(a, max(a, b), edge, lane, o0, o1, w, ok, *opp)

@@ -41,9 +41,11 @@ Per ego and step, with s the arc length of the ego's front bumper projected on i
   ``stop_zone_m`` of its stop position; then it only gives way as above.
 * **Speed for the road ahead.** v <= sqrt(v_i^2 + 2 b_comf (s_i - s)) for every lane piece i
   starting within ``lookahead_m`` at s_i with speed limit v_i x ``speed_factor`` (SUMO's
-  speedFactor idea; junction internal lanes carry netconvert's turning speeds). Off by default
-  (``speed_factor`` unset): a cap in a junction shifts a controller's timing there, which can
-  leave APF-SA stalled after being passed.
+  speedFactor idea; 1 by default): the legal limits of the route's normal lanes, the one before a
+  junction running on through it. A junction's internal lanes carry netconvert's turning speeds, no
+  legal limit; they count only with ``turn_speeds`` (the controllers keep their own curve speed, and
+  a cap in a junction shifted APF-SA's timing there enough to leave it stalled after being passed:
+  left_turn, seed 1). ``speed_limits = false`` keeps no limit.
 
 The command (desired velocity, m/s) keeps its direction; only its length is capped -- except while
 the ego is held at a signal or a crossing below ``HELD_MPS``: then it points along the route path at
@@ -126,8 +128,12 @@ def road_speed_cap(task: EgoTask, s_m: float, p: RulesParams) -> float:
     """Highest speed at arc length ``s_m`` from which every lane speed limit ahead (and the limit
     of the piece the ego is on) can be met braking at b_comf."""
     lim = task.speed_limits
-    if p.speed_factor is None or lim is None or len(lim) == 0:
+    if not p.speed_limits or lim is None or len(lim) == 0:
         return math.inf
+    if lim.shape[1] > 2 and not p.turn_speeds:  # a junction's internal lanes: the limit before it runs on
+        lim = lim[lim[:, 2] == 0.0]
+        if not len(lim):
+            return math.inf
     b = p.comfort_decel_mps2
     starts, v = lim[:, 0], lim[:, 1] * p.speed_factor
     here = max(0, int(np.searchsorted(starts, s_m, side="right")) - 1)
@@ -162,7 +168,7 @@ class TrafficRulesLayer:
         wide = wide_exits(task, self._turn_radius_m)
         narrow = narrow_stretches(task) if task.lanes else ()
         watch = (any(lk.tls or lk.foes or lk.inside or lk.state in STOP_SIGNS or lk.crossings for lk in task.links) or bool(wide)
-                 or bool(narrow) or self.p.speed_factor is not None)
+                 or bool(narrow) or (self.p.speed_limits and task.speed_limits is not None and len(task.speed_limits) > 0))
         exits = junction_exits(task) if task.lanes else ()
         self._egos[task.vid] = e = _Ego(task, watch or any(x == x for x in exits), wide=wide, narrow=narrow, exits=exits)
         if e.watch:

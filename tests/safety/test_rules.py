@@ -96,12 +96,26 @@ def test_road_speed_cap_is_the_braking_envelope_of_the_limits_ahead():
     limits = np.array([[0.0, 20.0], [100.0, 10.0], [130.0, 20.0]])
     task = EgoTask("e", np.zeros(2), np.array([[0.0, 0.0], [200.0, 0.0]]), 20.0, (), limits)
     p = RulesParams(comfort_decel_mps2=2.0, speed_factor=1.0)
-    assert road_speed_cap(task, 50.0, RulesParams()) == math.inf  # off by default
+    assert road_speed_cap(task, 50.0, RulesParams(speed_limits=False)) == math.inf
+    assert road_speed_cap(task, 50.0, RulesParams(comfort_decel_mps2=2.0)) == pytest.approx(math.sqrt(300.0))  # on by default
     assert road_speed_cap(task, 50.0, p) == pytest.approx(math.sqrt(10.0**2 + 2 * 2.0 * 50.0))  # 17.32
     assert road_speed_cap(task, 110.0, p) == pytest.approx(10.0)  # on the slow piece
     assert road_speed_cap(task, 0.0, p) == pytest.approx(20.0)  # sqrt(100 + 400) = 22.4 > 20 here
     assert road_speed_cap(task, 50.0, RulesParams(comfort_decel_mps2=2.0, speed_factor=1.2)) == \
         pytest.approx(math.sqrt(12.0**2 + 200.0))
+
+
+def test_a_junctions_turning_speed_counts_only_when_asked_the_limit_before_it_runs_on():
+    # 0-100 m an edge at 20 m/s, 100-120 m a junction's internal lane at 8 m/s (netconvert's turning speed),
+    # then an edge at 15 m/s
+    limits = np.array([[0.0, 20.0, 0.0], [100.0, 8.0, 1.0], [120.0, 15.0, 0.0]])
+    task = EgoTask("e", np.zeros(2), np.array([[0.0, 0.0], [200.0, 0.0]]), 20.0, (), limits)
+    legal = RulesParams(comfort_decel_mps2=2.0)
+    assert road_speed_cap(task, 110.0, legal) == pytest.approx(math.sqrt(15.0**2 + 2 * 2.0 * 10.0))  # 16.3: 20 runs on
+    assert road_speed_cap(task, 90.0, legal) == pytest.approx(math.sqrt(15.0**2 + 2 * 2.0 * 30.0))  # 18.6
+    turns = RulesParams(comfort_decel_mps2=2.0, turn_speeds=True)
+    assert road_speed_cap(task, 110.0, turns) == pytest.approx(8.0)
+    assert road_speed_cap(task, 90.0, turns) == pytest.approx(math.sqrt(8.0**2 + 2 * 2.0 * 10.0))  # 10.2
 
 
 @pytest.fixture(scope="module")
@@ -135,3 +149,35 @@ def test_without_rules_the_ego_runs_the_stop_sign_and_the_metric_says_so(stop_gr
     _, m = _stop_run(stop_grid, "none")
     (c,) = m["stop_crossings"]
     assert c["violation"] and c["state"] == "w" and m["stop_sign_violations"] == 1
+
+
+def _slow_street(d: pathlib.Path, traffic_table: str):
+    """A netgenerate 3x3 grid whose streets all have a 30 km/h limit (8.33 m/s); the scripted ego wants 12 m/s."""
+    subprocess.run([str(BIN / "netgenerate"), "--grid", "--grid.x-number", "3", "--grid.y-number", "3",
+                    "--grid.length", "150", "--default.lanenumber", "1", "--default.speed", "8.33",
+                    "--no-turnarounds", "true", "--seed", "1", "-o", str(d / "grid.net.xml")],
+                   check=True, capture_output=True)
+    (d / "ego.rou.xml").write_text(
+        '<routes>\n  <vType id="ego_car" length="4.5" width="1.8" accel="3" decel="8" maxSpeed="20"/>\n'
+        '  <route id="r" edges="A1B1 B1C1"/>\n'
+        '  <vehicle id="ego" type="ego_car" route="r" depart="0" departPos="5" departSpeed="0"/>\n</routes>\n')
+    f = d / "slow.toml"
+    f.write_text('name = "slow"\n[sim]\nnet = "grid.net.xml"\nroutes = ["ego.rou.xml"]\nstep_s = 0.1\nduration_s = 40\n'
+                 'seed = 1\n[ego]\nids = ["ego"]\ncontroller = "scripted"\ncruise_speed_mps = 12.0\nlayers = ["traffic"]\n'
+                 f'[controllers.scripted]\nspeed_mps = 12.0\n{traffic_table}')
+    return scenario.load(f)
+
+
+def test_the_legal_speed_limit_is_kept_by_default(tmp_path):
+    """SPEC §5: v <= the lane's limit x speed_factor (1 by default): on a 30 km/h street the ego that wants 12 m/s
+    drives at most 8.33 m/s and ``speeding_m`` is 0; with ``speed_limits = false`` it drives 12 m/s and speeds."""
+    res = runner.run(_slow_street(tmp_path, ""))
+    ego = res.traj[res.traj["id"] == "ego"]
+    on_edges = ~ego["lane"].astype(str).str.startswith(":")
+    assert ego["speed"][on_edges].max() <= 8.33 + 1e-6
+    assert ego["speed"][on_edges].max() >= 8.0  # it does drive at the limit
+    assert outputs.run_metrics(res)["speeding_m"] == 0.0
+    (tmp_path / "off").mkdir()
+    off = runner.run(_slow_street(tmp_path / "off", "[layers.traffic]\nspeed_limits = false\n"))
+    assert off.traj[off.traj["id"] == "ego"]["speed"].max() >= 11.9
+    assert outputs.run_metrics(off)["speeding_m"] > 100.0
