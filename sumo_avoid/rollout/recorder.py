@@ -38,6 +38,16 @@ class Recorder:
         self._sumo_last: dict[tuple[str, str], int] = {}
         self._signals: list[tuple[float, str, str]] = []
         self._signal_now: dict[str, str] = {}
+        self._strings: dict[str, str] = {}  # one str object per id and lane id, however many steps record it
+
+    def _canonical(self, values, idx: np.ndarray) -> np.ndarray:
+        """values[idx] as an object array of one str object per distinct value: SUMO hands out new str objects
+        every step, and holding those made a city hour's recording (100 egos, ~2,500 road users within reach)
+        several GB larger than its numbers."""
+        keep = self._strings.setdefault
+        out = np.empty(len(idx), dtype=object)
+        out[:] = [keep(v, v) if type(v) is str else keep(str(v), str(v)) for v in (values[i] for i in idx.tolist())]
+        return out
 
     def record(self, step: int, snap: Snapshot) -> None:
         for tls, state in snap.signals.items():
@@ -55,11 +65,11 @@ class Recorder:
             idx = np.flatnonzero(rows)
             if len(idx) == 0:
                 continue
-            ids = np.array(snap.ids, dtype=object)[idx]
+            ids = self._canonical(snap.ids, idx)
             self._classes.update(zip(ids.tolist(), np.array(snap.vclass, dtype=object)[idx].tolist()))
             chunks.append((step, snap.time_s, ids, snap.is_ego[idx], snap.pos[idx], snap.vel[idx],
                            snap.heading[idx], snap.length[idx], snap.width[idx],
-                           np.array(snap.lane, dtype=object)[idx], snap.lane_pos[idx], snap.z[idx]))
+                           self._canonical(snap.lane, idx), snap.lane_pos[idx], snap.z[idx]))
 
     def record_sumo_collisions(self, step: int, collisions) -> None:
         for c in collisions:
@@ -100,14 +110,15 @@ def _frame(chunks: list[tuple]) -> pd.DataFrame:
     table = pd.DataFrame({
         "step": np.repeat([c[0] for c in chunks], sizes).astype(np.int64),
         "time_s": np.repeat([c[1] for c in chunks], sizes),
-        "id": np.concatenate([c[2] for c in chunks]).astype(str),
+        "id": np.concatenate([c[2] for c in chunks]),  # str objects (an .astype(str) made a fixed-width copy of
+        # the longest id per row: GBs for a city hour)
         "is_ego": np.concatenate([c[3] for c in chunks]),
         "x": pos[:, 0], "y": pos[:, 1], "vx": vel[:, 0], "vy": vel[:, 1],
         "speed": np.hypot(vel[:, 0], vel[:, 1]),
         "heading": wrap_angle(np.concatenate([c[6] for c in chunks])),
         "length": np.concatenate([c[7] for c in chunks]),
         "width": np.concatenate([c[8] for c in chunks]),
-        "lane": np.concatenate([c[9] for c in chunks]).astype(str),
+        "lane": np.concatenate([c[9] for c in chunks]),
         "lane_pos": np.concatenate([c[10] for c in chunks]),
     })
     if np.any(z != 0.0):  # a net with heights (bridges, tunnels: core.levels); a flat one's table stays as it was
