@@ -76,6 +76,27 @@ def test_backing_up_waits_for_the_traffic_behind(ctl):
     assert ctl._clear_behind(_scene_behind(2.0, 5.0, d_o=3.5))
 
 
+def _scene_beside(d_o, v_mps, length=1.7, width=0.65, grow=0.0):
+    """The ego (4.5 x 1.8) at s = 100, d = 0; one road user alongside its front half (centre at s = 101.5) at d_o."""
+    import numpy as np
+
+    from sumo_avoid.control.road_view import FrenetScene
+
+    return FrenetScene(100.0, 0.0, 0.0, np.zeros(2), 4.5, 1.8, np.array([[101.5, d_o]]), np.zeros(1),
+                       np.array([length]), np.array([width]), np.array([[v_mps, 0.0]]),
+                       lambda s: (np.full(len(s), -5.0), np.full(len(s), 5.0)), o_grow=np.array([grow]))
+
+
+def test_no_backing_up_while_someone_squeezes_past_alongside(ctl):
+    # berlin_eastbound seed 3: a cyclist passing 0.0-0.3 m from the ego's side; backing up turned the car and
+    # its nose swung into him. Within 0.9 + 0.5 m of the centre line, alongside: moving, or keeping a VRU margin
+    assert not ctl._clear_behind(_scene_beside(-1.2, 1.0))  # its side 0.875 m from the centre line
+    assert not ctl._clear_behind(_scene_beside(-1.2, 0.0, grow=0.5))  # standing, a cyclist's margin
+    assert ctl._clear_behind(_scene_beside(-1.8, 1.0))  # its side at 1.475 > 1.4: clear
+    assert ctl._clear_behind(_scene_beside(-2.25, 0.0, 4.5, 1.8))  # a parked car 0.45 m off: the escape goes on
+    assert not ctl._clear_behind(_scene_beside(-2.25, 2.0, 4.5, 1.8))  # ... a moving one does not let it back up
+
+
 def _scene_ahead(gap_m, ego_speed_mps):
     import numpy as np
 

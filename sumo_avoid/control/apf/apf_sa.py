@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sumo_avoid.control.apf.anneal import anneal
 from sumo_avoid.control.apf.apf import ApfDriver, ApfParams
 from sumo_avoid.control.apf.oncoming_pass import ABORT_D_M, PASS_CARROT_MIN_M, RADAR_SIGHT_M, OncomingPass, PassParams
 from sumo_avoid.control.apf.queue import STAND_MPS, lane_runs_past, waits_in_queue
@@ -68,6 +69,9 @@ class ApfSaParams:
                                                 "nearer than this ...")
     reverse_clear_s: float = field_doc(3.0, doc="... plus this times the closing speed (the ego backing, the "
                                                 "other driving on), s")
+    reverse_side_clear_m: float = field_doc(0.5, doc="... and no one moving (or a person or cyclist) alongside the ego "
+                                                     "nearer than this to its sides: backing up turns the car, and its "
+                                                     "nose swings sideways, m")
     escape_margin_m: float = field_doc(0.5, doc="the escape target keeps the car this far from road edges, m")
     passing: PassParams = field_doc(default_factory=PassParams, inline=True,
                                     doc="the oncoming-lane pass's keys (control/apf/oncoming_pass.py)")
@@ -167,7 +171,7 @@ class ApfSaController(BaseController):
                     (t >= st.cooldown_until_s or (view.passing is not None and st.pass_checked_s == t)) and
                     not waits_in_queue(sc, task, view.length_m, 0.0 if st.stood_since_s is None else t - st.stood_since_s,
                                        p.queue_reach_m, p.queue_patience_s)):
-                end = self._anneal(view, sc, target)
+                end = anneal(self.driver, self.rng, self.p, view, sc, target, self._room_ahead)
                 offset = None if end is None else self._inside_offset(view, sc, end)
                 if end is None:
                     self.failed_searches += 1
@@ -349,7 +353,19 @@ class ApfSaController(BaseController):
         behind = in_strip & (x.min(axis=1) < 0.0)
         gap = -x.max(axis=1) - 0.5 * sc.length
         closing = np.maximum(sc.o_vel[:, 0], 0.0) + self.p.escape_reverse_speed_mps
-        return not (behind & (gap < self.p.reverse_clear_m + self.p.reverse_clear_s * closing)).any()
+        return not (behind & (gap < self.p.reverse_clear_m + self.p.reverse_clear_s * closing)).any() and \
+            not self._alongside(sc).any()
+
+    def _alongside(self, sc: FrenetScene) -> np.ndarray:
+        """(O,) bool: road users beside the ego's footprint (taken as aligned with the road), within
+        ``reverse_side_clear_m`` of its sides, that move or keep a VRU margin (berlin_eastbound, seed 3: the ego
+        backed up and turned 15 degrees while a cyclist squeezed past it, and its nose swung into him)."""
+        rel = footprint_corners(sc.o_pos, sc.o_heading, sc.o_length, sc.o_width) - sc.q
+        half_l, half_w = 0.5 * sc.length, 0.5 * sc.width + self.p.reverse_side_clear_m
+        along = (rel[..., 0].max(axis=1) > -half_l) & (rel[..., 0].min(axis=1) < half_l)
+        near = (rel[..., 1].max(axis=1) >= -half_w) & (rel[..., 1].min(axis=1) <= half_w)
+        grow = sc.o_grow if sc.o_grow is not None else np.zeros(len(sc.o_pos))
+        return along & near & ((np.hypot(*sc.o_vel.T) >= 0.3) | (grow > 0.0))
 
     def _update_escape(self, st: _EgoState, d: float, t: float) -> None:
         """An escape ends once its offset has been held ``escape_hold_s``, or after
@@ -368,33 +384,3 @@ class ApfSaController(BaseController):
             st.escape_offset, st.held_since_s, st.reversing = None, None, False
             st.history.clear()
             st.cooldown_until_s = t + p.trap_window_s
-
-    def _outside(self, view: RoadView, x1, L: float, W: float) -> bool:
-        """Does a route-aligned footprint at (s, d) = x1 stick out of the ego's lanes?"""
-        c = footprint_corners(x1[None, :], np.zeros(1), np.array([L]), np.array([W]))[0]
-        lo, hi = view.corridor(c[:, 0])
-        return bool(((c[:, 1] < lo - 1e-9) | (c[:, 1] > hi + 1e-9)).any())
-
-    def _anneal(self, view: RoadView, sc: FrenetScene, target):
-        """Seed Fig. 2 on the frozen field, in (s, d); returns the escape point or None."""
-        p, rng = self.p, self.rng
-        x0 = sc.q
-        # candidate footprints are aligned with the route (where the car would end up driving),
-        # not with its momentary heading, which may point at the kerb after a manoeuvre
-        U0 = float(self.driver.field(sc, x0[None, :], target, heading=0.0).U[0])
-        x, Ux, T = x0.copy(), U0, p.sa_t0
-        for _ in range(p.sa_max_iter):
-            a = rng.uniform(0.0, 2.0 * math.pi)
-            x1 = x + p.sa_step_m * np.array([math.cos(a), math.sin(a)])
-            if self._outside(view, x1, sc.length, sc.width):
-                T *= p.sa_cooling
-                continue
-            U1 = float(self.driver.field(sc, x1[None, :], target, heading=0.0).U[0])
-            delta = U1 - Ux
-            if delta <= 0.0 or math.exp(-delta / max(T, 1e-12)) > rng.uniform():
-                x, Ux = x1, U1
-            T *= p.sa_cooling
-            if (Ux < U0 and np.hypot(*(x - x0)) >= p.sa_escape_m
-                    and self._room_ahead(sc, at=x, heading=0.0) >= p.sa_free_ahead_m):
-                return x
-        return None
