@@ -56,17 +56,19 @@ def _where(traj: pd.DataFrame, other: str, t: float, e) -> str:
 
 def contact_lines(m: dict, traj: pd.DataFrame) -> list[str]:
     out = []
-    ego = traj[traj["id"] == "ego"].set_index("time_s")
+    egos = set(traj.loc[traj["is_ego"].astype(bool), "id"])  # any ego id (an unseen district's egos are its cars)
     for ev in m.get("collision_events", []):
-        other = ev["b"] if ev["a"] == "ego" else ev["a"]
+        me = ev["a"] if ev["a"] in egos else ev["b"]
+        other = ev["b"] if me == ev["a"] else ev["a"]
+        ego = traj[traj["id"] == me].set_index("time_s")
         t = round(ev["time_s"], 1)
         e = ego.iloc[(ego.index.to_series() - t).abs().argsort()[:1]].iloc[0]
         lane_h = _lane_heading(traj, e["lane"], t)
         skew = f"{math.degrees(_angle(e['heading'], lane_h)):.0f} deg to its lane" if lane_h == lane_h else "lane direction n/a"
-        out.append(f"  ours  t={t:.1f} {other} ({ev.get('other_class', '?')}) ego on {e['lane']} at "
+        out.append(f"  ours  t={t:.1f} {other} ({ev.get('other_class', '?')}) {me} on {e['lane']} at "
                    f"{e['speed']:.1f} m/s, {skew}{_where(traj, other, t, e)}")
     for ev in m.get("sumo_collision_events", []):
-        if "ego" in (ev["a"], ev["b"]):
+        if egos & {ev["a"], ev["b"]}:
             out.append(f"  SUMO  t={ev['time_s']:.1f} {ev['a']}/{ev['b']} {ev['type']} on {ev['lane']} "
                        f"(collider {ev['collider']})")
     return out
