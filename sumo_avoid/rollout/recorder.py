@@ -46,7 +46,7 @@ class Recorder:
         several GB larger than its numbers."""
         keep = self._strings.setdefault
         out = np.empty(len(idx), dtype=object)
-        out[:] = [keep(v, v) if type(v) is str else keep(str(v), str(v)) for v in (values[i] for i in idx.tolist())]
+        out[:] = [keep(v, v) for v in (str(values[i]) for i in idx.tolist())]  # str() of a str is itself
         return out
 
     def record(self, step: int, snap: Snapshot) -> None:

@@ -116,6 +116,7 @@ class _Ego:
     wide: dict = field(default_factory=dict)  # link position -> its wide exit into oncoming traffic (wide_turns)
     narrow: tuple = ()  # stretches too narrow to pass an oncoming car (narrow_streets)
     exits: tuple = ()  # per link, s where the route leaves its junction (junction_box)
+    limits: np.ndarray | None = None  # the speed limits the layer keeps (kept_limits), once per ego
 
 
 def signal_char(signals, link) -> str:
@@ -124,16 +125,23 @@ def signal_char(signals, link) -> str:
     return state[link.link_index] if 0 <= link.link_index < len(state) else ""
 
 
-def road_speed_cap(task: EgoTask, s_m: float, p: RulesParams) -> float:
-    """Highest speed at arc length ``s_m`` from which every lane speed limit ahead (and the limit
-    of the piece the ego is on) can be met braking at b_comf."""
+def kept_limits(task: EgoTask, p: RulesParams) -> np.ndarray | None:
+    """The rows of ``task.speed_limits`` the layer keeps (None: none): the normal lanes' legal limits, the one
+    before a junction running on through it; a junction's internal lanes too with ``turn_speeds``."""
     lim = task.speed_limits
     if not p.speed_limits or lim is None or len(lim) == 0:
-        return math.inf
-    if lim.shape[1] > 2 and not p.turn_speeds:  # a junction's internal lanes: the limit before it runs on
+        return None
+    if lim.shape[1] > 2 and not p.turn_speeds:
         lim = lim[lim[:, 2] == 0.0]
-        if not len(lim):
-            return math.inf
+    return lim if len(lim) else None
+
+
+def road_speed_cap(task: EgoTask, s_m: float, p: RulesParams, limits=False) -> float:
+    """Highest speed at arc length ``s_m`` from which every lane speed limit ahead (and the limit
+    of the piece the ego is on) can be met braking at b_comf (``limits``: :func:`kept_limits`, if known)."""
+    lim = kept_limits(task, p) if limits is False else limits
+    if lim is None:
+        return math.inf
     b = p.comfort_decel_mps2
     starts, v = lim[:, 0], lim[:, 1] * p.speed_factor
     here = max(0, int(np.searchsorted(starts, s_m, side="right")) - 1)
@@ -167,10 +175,12 @@ class TrafficRulesLayer:
     def add_ego(self, task: EgoTask) -> None:
         wide = wide_exits(task, self._turn_radius_m)
         narrow = narrow_stretches(task) if task.lanes else ()
+        limits = kept_limits(task, self.p)
         watch = (any(lk.tls or lk.foes or lk.inside or lk.state in STOP_SIGNS or lk.crossings for lk in task.links) or bool(wide)
-                 or bool(narrow) or (self.p.speed_limits and task.speed_limits is not None and len(task.speed_limits) > 0))
+                 or bool(narrow) or limits is not None)
         exits = junction_exits(task) if task.lanes else ()
-        self._egos[task.vid] = e = _Ego(task, watch or any(x == x for x in exits), wide=wide, narrow=narrow, exits=exits)
+        self._egos[task.vid] = e = _Ego(task, watch or any(x == x for x in exits), wide=wide, narrow=narrow, exits=exits,
+                                        limits=limits)
         if e.watch:
             self._watching.add(task.vid)
         self._allway |= any(lk.state == "w" and lk.foes for lk in task.links)
@@ -305,7 +315,7 @@ class TrafficRulesLayer:
             e.seen = True
             v = abs(float(obs.ego_speed[i]))
             sig, line = self._signal_cap(e, snap.signals, v, float(snap.length[r]))
-            road = road_speed_cap(e.task, e.s_m, self.p)
+            road = road_speed_cap(e.task, e.s_m, self.p, e.limits)
             if sig < v or sig < 0.5:  # one episode per ego and stop line, however often the cap binds
                 self._held.add((vid, line))
             if lanes is None:

@@ -325,11 +325,16 @@ class ApfSaController(BaseController):
         """The other vehicles against a strip of half width W/2 + ``gov_margin_m`` through ``pos``
         (s, d) along ``heading``: their corners' positions along it (O, 4), m, and which of them
         reach into it across (O,)."""
-        hd = np.array([math.cos(heading), math.sin(heading)])
-        rel = footprint_corners(sc.o_pos, sc.o_heading, sc.o_length, sc.o_width) - pos
-        x, y = rel @ hd, rel @ np.array([-hd[1], hd[0]])
+        x, y = self._across(sc, pos, heading)
         half = 0.5 * sc.width + self.p.apf.gov_margin_m
         return x, (y.max(axis=1) >= -half) & (y.min(axis=1) <= half)
+
+    @staticmethod
+    def _across(sc: FrenetScene, pos, heading: float):
+        """The other vehicles' corners along and across a line through ``pos`` (s, d) along ``heading``, (O, 4) each, m."""
+        hd = np.array([math.cos(heading), math.sin(heading)])
+        rel = footprint_corners(sc.o_pos, sc.o_heading, sc.o_length, sc.o_width) - pos
+        return rel @ hd, rel @ np.array([-hd[1], hd[0]])
 
     def _room_ahead(self, sc: FrenetScene, at=None, heading=None) -> float:
         """Free length ahead of the ego's footprint (placed at ``at`` with ``heading``, in (s, d)), m."""
@@ -349,21 +354,22 @@ class ApfSaController(BaseController):
         expect a car to come back at them)."""
         if not len(sc.o_pos):
             return True
-        x, in_strip = self._strip(sc, sc.q, 0.0)
-        behind = in_strip & (x.min(axis=1) < 0.0)
+        x, y = self._across(sc, sc.q, 0.0)  # the road-aligned strip's frame
+        half = 0.5 * sc.width + self.p.apf.gov_margin_m
+        behind = (y.max(axis=1) >= -half) & (y.min(axis=1) <= half) & (x.min(axis=1) < 0.0)
         gap = -x.max(axis=1) - 0.5 * sc.length
         closing = np.maximum(sc.o_vel[:, 0], 0.0) + self.p.escape_reverse_speed_mps
         return not (behind & (gap < self.p.reverse_clear_m + self.p.reverse_clear_s * closing)).any() and \
-            not self._alongside(sc).any()
+            not self._alongside(sc, x, y).any()
 
-    def _alongside(self, sc: FrenetScene) -> np.ndarray:
-        """(O,) bool: road users beside the ego's footprint (taken as aligned with the road), within
-        ``reverse_side_clear_m`` of its sides, that move or keep a VRU margin (berlin_eastbound, seed 3: the ego
-        backed up and turned 15 degrees while a cyclist squeezed past it, and its nose swung into him)."""
-        rel = footprint_corners(sc.o_pos, sc.o_heading, sc.o_length, sc.o_width) - sc.q
+    def _alongside(self, sc: FrenetScene, x, y) -> np.ndarray:
+        """(O,) bool: road users beside the ego's footprint (taken as aligned with the road; ``x``, ``y`` their corners
+        along and across it), within ``reverse_side_clear_m`` of its sides, that move or keep a VRU margin
+        (berlin_eastbound, seed 3: the ego backed up and turned 15 degrees while a cyclist squeezed past it, and its
+        nose swung into him)."""
         half_l, half_w = 0.5 * sc.length, 0.5 * sc.width + self.p.reverse_side_clear_m
-        along = (rel[..., 0].max(axis=1) > -half_l) & (rel[..., 0].min(axis=1) < half_l)
-        near = (rel[..., 1].max(axis=1) >= -half_w) & (rel[..., 1].min(axis=1) <= half_w)
+        along = (x.max(axis=1) > -half_l) & (x.min(axis=1) < half_l)
+        near = (y.max(axis=1) >= -half_w) & (y.min(axis=1) <= half_w)
         grow = sc.o_grow if sc.o_grow is not None else np.zeros(len(sc.o_pos))
         return along & near & ((np.hypot(*sc.o_vel.T) >= 0.3) | (grow > 0.0))
 
