@@ -251,3 +251,31 @@ def test_the_push_from_a_car_beside_does_not_grow_as_the_ego_turns_away():
     turned = ctl.field(sc, q, target, heading=-0.38).F[0]
     assert straight[1] < -1.0  # it does push the ego away from it
     assert turned[1] == pytest.approx(straight[1])
+
+
+class _TaperingView:
+    """The lanes' left bound falls from 4.8 m to 2.9 m between s = 100 and 112 m (berlin_bike_tram seed 3's
+    tapering lane, as traced), the right one at -1.6 m; the goal far away."""
+    goal = np.array([1000.0, 0.0])
+    length_m = 1000.0
+
+    @staticmethod
+    def corridor(s):
+        s = np.atleast_1d(np.asarray(s, float))
+        return np.full(len(s), -1.6), np.interp(s, [100.0, 112.0], [4.8, 2.9])
+
+
+@pytest.mark.parametrize("s_ego, offset, expected_d", [
+    (80.0, 3.2, 3.2),  # carrot at s 95: the lanes still 4.8 m wide on the left, d as asked
+    (100.0, 3.2, 2.0),  # carrot at s 115: beyond the taper, 2.9 - 0.9 (half the car's width)
+    (100.0, -3.0, -0.7),  # the right bound: -1.6 + 0.9
+    (100.0, 0.0, 0.0),  # the path's own line is not moved
+])
+def test_an_offset_carrot_lies_inside_the_lanes_where_it_lies(s_ego, offset, expected_d):
+    from sumo_avoid.control.road_view import FrenetScene
+
+    sc = FrenetScene(s_ego, 0.0, 0.0, np.zeros(2), 4.5, 1.8, np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0),
+                     np.zeros((0, 2)), _TaperingView.corridor)
+    target = _driver().carrot(_TaperingView(), sc, offset)
+    assert target[0] == pytest.approx(s_ego + 15.0)  # lookahead_min_m at a standstill
+    assert target[1] == pytest.approx(expected_d)

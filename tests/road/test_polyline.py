@@ -59,3 +59,23 @@ def test_tracking_gives_the_floats_of_a_projection_per_point():
                 np.testing.assert_allclose(polyline_track(path, q, start, window), ref, rtol=1e-12, atol=1e-9)
     assert polyline_track([[1.0, 2.0]], [[5.0, 5.0], [6.0, 6.0]]).tolist() == [0.0, 0.0]  # a one-vertex path
     assert polyline_track(U_TURN, np.zeros((0, 2))).shape == (0,)
+
+
+def test_an_out_and_back_spur_is_cut_where_the_line_comes_back_past_its_turn():
+    """Colonias' 376317858#4, by hand: the line runs west to (10, 0), an edge's lane laid 12 m back sends
+    it east to (22, 0.5) and (21, 1), and it comes west again past x = 10 at (5, 1)."""
+    from sumo_avoid.road.polyline import spur_mask
+
+    pts = np.array([[30.0, 0.0], [20.0, 0.0], [10.0, 0.0], [22.0, 0.5], [21.0, 1.0], [5.0, 1.0], [0.0, 1.0]])
+    assert spur_mask(pts).tolist() == [True, True, True, False, False, True, True]
+
+
+@pytest.mark.parametrize("pts", [
+    [[0.0, 0.0], [10.0, 0.0], [0.0, 3.0], [-20.0, 3.0]],  # a sharp U-turn: never back past x = 10 going east
+    [[0.0, 0.0], [10.0, 0.0], [20.0, 1.0], [30.0, 5.0], [30.0, 20.0]],  # a left turn: no turn back at all
+    [[0.0, 0.0], [10.0, 0.0], [-50.0, 1.0], [20.0, 2.0]],  # back past it, but beyond 50 m of line
+])
+def test_a_u_turn_a_turn_and_a_long_excursion_are_kept(pts):
+    from sumo_avoid.road.polyline import spur_mask
+
+    assert spur_mask(np.array(pts)).all()
