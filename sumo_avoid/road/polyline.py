@@ -177,39 +177,66 @@ def polyline_tangent(path, point):
 SPUR_COS = -0.7
 #: An excursion that comes back past where it turned within this much line is a spur, m.
 SPUR_REACH_M = 50.0
+#: The line that replaces a spur rejoins the way back this many metres ahead per metre across.
+SPUR_SLOPE = 2.0
 
 
-def spur_mask(points, reach_m: float = SPUR_REACH_M, cos_back: float = SPUR_COS) -> np.ndarray:
-    """(P,) bool: False for the points of out-and-back spurs of a (P,2) polyline (no duplicate
-    points). A spur starts where the line turns back (consecutive segments at a cosine below
-    ``cos_back``) and ends at the first point, within ``reach_m`` of line, that lies ahead of the
-    turning point along the direction it came in and is reached moving that way: the points in
-    between are no road a car can drive. OSM-derived nets have them where an edge's lanes are
-    laid apart: a 0.29 m edge whose lane 1 lies 12 m behind its lane 2 (unseen Colonias,
-    376317858#4), where a lane change on that edge sent the path 12 m back and round again, and the
-    car stood at the hairpin for good. A U-turn, which never comes back past its turning point, is
-    kept."""
-    p = np.asarray(points, float).reshape(-1, 2)
+def cut_spurs(points, reach_m: float = SPUR_REACH_M, cos_back: float = SPUR_COS,
+              slope: float = SPUR_SLOPE) -> tuple[np.ndarray, np.ndarray]:
+    """(points (P,2), keep (P,) bool): a (P,2) polyline (no duplicate points) without its out-and-back
+    spurs. A spur starts at a vertex where the line turns back (consecutive segments at a cosine below
+    ``cos_back``) and comes back past it, moving the way it came in, within ``reach_m`` of line. The
+    excursion is skipped: the line leaves the way in level with where the way back starts (that point
+    replaces the turning vertex) and goes straight to the first point of the way back that lies
+    ``slope`` times as far ahead as across (it replaces the vertex before it); the vertices in between
+    are dropped (keep False, so every kept vertex keeps its index). OSM-derived nets have spurs where an
+    edge's lanes are laid apart: a 0.29 m edge whose lane 1 lies 12 m behind its lane 2 (unseen
+    Colonias, 376317858#4), where a lane change on it sent the path 12 m back and round again, and the
+    car stood at the hairpin for good. A U-turn, which never comes back past its turning point, is kept."""
+    p = np.array(points, float).reshape(-1, 2)
     keep = np.ones(len(p), bool)
     seg = np.diff(p, axis=0)
     n = np.hypot(*seg.T) if len(seg) else np.zeros(0)
     u = seg / np.maximum(n, 1e-12)[:, None]
     i = 1
     while i < len(p) - 1:
-        if u[i - 1] @ u[i] >= cos_back:
+        cut = _spur(p, u, n, i, reach_m, slope) if u[i - 1] @ u[i] < cos_back else None
+        if cut is None:
             i += 1
             continue
-        walked, end = 0.0, None
-        for j in range(i + 1, len(p)):
-            walked += n[j - 1]
-            if walked > reach_m:
-                break
-            if (p[j] - p[i]) @ u[i - 1] > 0.0 and u[j - 1] @ u[i - 1] > 0.0:
-                end = j
-                break
-        if end is None:
-            i += 1
+        a, j, q = cut
+        p[i] = a
+        keep[i] = np.hypot(*(a - p[i - 1])) > 1e-9  # (the way back starts behind the way in's last vertex)
+        keep[i + 1:j - 1] = False
+        if np.hypot(*(q - p[j])) > 1e-9:
+            p[j - 1] = q
+        else:  # it rejoins at vertex j itself
+            keep[j - 1] = False
+        i = j
+    return p, keep
+
+
+def _spur(p, u, n, i: int, reach_m: float, slope: float):
+    """(a, j, q) for a spur that turns back at vertex i (:func:`cut_spurs`): the point a on the way in
+    level with the start of the way back, and q on its segment j-1 -> j where the line rejoins it; None
+    where the line does not come back past vertex i within ``reach_m`` (no spur)."""
+    ahead = u[i - 1]
+    along = np.concatenate([[0.0], np.cumsum(n[i:])])  # line from vertex i to vertex i + k
+    back = np.flatnonzero((along[:-1] <= reach_m) & (u[i:] @ ahead > 0.0))
+    if not len(back) or not ((p[i:] - p[i]) @ ahead > 0.0)[: int(np.searchsorted(along, reach_m, "right"))].any():
+        return None
+    r = i + int(back[0])  # the way back starts at vertex r
+    t_a = min(max(float((p[r] - p[i - 1]) @ ahead) / max(n[i - 1], 1e-12), 0.0), 1.0)
+    a = p[i - 1] + t_a * (p[i] - p[i - 1])
+    for j in range(r + 1, len(p)):
+        if along[j - 1 - i] > reach_m:
+            return None
+        if u[j - 1] @ ahead <= 0.0:
             continue
-        keep[i + 1:end] = False
-        i = end
-    return keep
+        t = np.minimum(np.arange(1, int(np.ceil(n[j - 1] / 0.05)) + 1) * 0.05 / max(n[j - 1], 1e-12), 1.0)[:, None]
+        pts = p[j - 1] + t * (p[j] - p[j - 1]) - a
+        fwd, across = pts @ ahead, np.abs(pts[:, 0] * ahead[1] - pts[:, 1] * ahead[0])
+        ok = np.flatnonzero((fwd > 0.0) & (fwd >= slope * across))
+        if len(ok):
+            return a, j, a + pts[ok[0]]
+    return None

@@ -10,7 +10,7 @@ from typing import NamedTuple
 import numpy as np
 
 from sumo_avoid.road.crossings import crossing_links
-from sumo_avoid.road.polyline import _cumlen, polyline_length, polyline_point_at, spur_mask
+from sumo_avoid.road.polyline import _cumlen, polyline_length, polyline_point_at, cut_spurs
 from sumo_avoid.road.right_of_way import RightOfWay, link_state
 from sumo_avoid.road.route import LanePiece, OncomingLane, RouteLink
 
@@ -232,7 +232,9 @@ class RoutePlanner:
         points = np.concatenate(pieces)
         keep = _keep_mask(points, tol=1e-3)
         kept = np.flatnonzero(keep)
-        keep[kept[~spur_mask(points[kept])]] = False  # out-and-back spurs of lanes laid apart (polyline.spur_mask)
+        points = points.copy()
+        points[kept], spur_free = cut_spurs(points[kept])  # out-and-back spurs of lanes laid apart
+        keep[kept[~spur_free]] = False
         path = points[keep]
         cum = _cumlen(path)
         kept_before = np.concatenate([[0], np.cumsum(keep)])  # kept points among the first n

@@ -61,13 +61,30 @@ def test_tracking_gives_the_floats_of_a_projection_per_point():
     assert polyline_track(U_TURN, np.zeros((0, 2))).shape == (0,)
 
 
-def test_an_out_and_back_spur_is_cut_where_the_line_comes_back_past_its_turn():
+def test_an_out_and_back_spur_is_skipped_from_level_with_its_far_end_to_twice_as_far_ahead_as_across():
     """Colonias' 376317858#4, by hand: the line runs west to (10, 0), an edge's lane laid 12 m back sends
-    it east to (22, 0.5) and (21, 1), and it comes west again past x = 10 at (5, 1)."""
-    from sumo_avoid.road.polyline import spur_mask
+    it east to (22, 0.5), and it comes west again from there, past x = 10 on (21, 1) -> (5, 1). The way
+    back starts at x = 22, behind the way in's vertex (20, 0): the line leaves the way in there and
+    rejoins the way back (1 m across) 2 m ahead, at (18, 1)."""
+    from sumo_avoid.road.polyline import cut_spurs
 
     pts = np.array([[30.0, 0.0], [20.0, 0.0], [10.0, 0.0], [22.0, 0.5], [21.0, 1.0], [5.0, 1.0], [0.0, 1.0]])
-    assert spur_mask(pts).tolist() == [True, True, True, False, False, True, True]
+    out, keep = cut_spurs(pts)
+    assert keep.tolist() == [True, True, False, False, True, True, True]
+    assert np.allclose(out[keep], [[30.0, 0.0], [20.0, 0.0], [18.0, 1.0], [5.0, 1.0], [0.0, 1.0]])
+
+
+def test_a_hairpin_inside_a_junction_is_left_where_its_way_back_starts():
+    """The shape netconvert gives a junction whose next edge's lane is laid 12 m back (the test net of
+    tests/road/test_hook.py): in along y = -4.8 to x = -3.5, back to -15.27, out again east, 0.5 m across
+    from (-15.07, -4.8) to (-9.75, -4.3). The line leaves the way in at x = -15.27 and keeps the way back."""
+    from sumo_avoid.road.polyline import cut_spurs
+
+    pts = np.array([[-200.0, -4.8], [-3.5, -4.8], [-15.27, -4.8], [-15.07, -4.8], [-9.75, -4.3], [1.15, -1.6]])
+    out, keep = cut_spurs(pts)
+    assert keep.tolist() == [True, True, True, True, True, True]
+    assert np.allclose(out[1], [-15.27, -4.8]) and np.allclose(out[2], [-15.27 + 0.05, -4.8])
+    assert np.allclose(out[3:], pts[3:])
 
 
 @pytest.mark.parametrize("pts", [
@@ -76,6 +93,7 @@ def test_an_out_and_back_spur_is_cut_where_the_line_comes_back_past_its_turn():
     [[0.0, 0.0], [10.0, 0.0], [-50.0, 1.0], [20.0, 2.0]],  # back past it, but beyond 50 m of line
 ])
 def test_a_u_turn_a_turn_and_a_long_excursion_are_kept(pts):
-    from sumo_avoid.road.polyline import spur_mask
+    from sumo_avoid.road.polyline import cut_spurs
 
-    assert spur_mask(np.array(pts)).all()
+    out, keep = cut_spurs(np.array(pts))
+    assert keep.all() and np.array_equal(out, np.array(pts))
