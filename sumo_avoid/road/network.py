@@ -16,7 +16,9 @@ The :class:`Road` object is immutable; :meth:`Road.from_net_file` caches the par
 from __future__ import annotations
 
 import functools
+import gzip
 import os
+import re
 
 import numpy as np
 import shapely
@@ -104,10 +106,12 @@ def _surface(lanes, nodes):
 class Road:
     """Immutable road geometry of one SUMO network. Build with :meth:`from_net_file`."""
 
-    def __init__(self, net, source: str = ""):
+    def __init__(self, net, source: str = "", lefthand: bool = False):
         s = object.__setattr__
         s(self, "source", source)
         s(self, "_net", net)
+        s(self, "lefthand", bool(lefthand))  # left-hand traffic: lane 0 is the left kerb lane (net attribute lefthand)
+        side = -1.0 if lefthand else 1.0  # which way (left of travel = +1) the lane indices grow
         s(self, "elements", read_elements(net))  # lanes with permissions, junctions, crossings, walking areas
         lanes = [ln for e in net.getEdges(withInternal=True) for ln in e.getLanes()]
         area = _surface(lanes, net.getNodes())
@@ -124,10 +128,10 @@ class Road:
             ls = sorted(e.getLanes(), key=lambda ln: ln.getIndex())
             for i, ln in enumerate(ls):
                 shape = np.asarray(ln.getShape(), float)
-                left = _offset_left(shape, ln.getWidth() / 2.0)
+                left = _offset_left(shape, side * ln.getWidth() / 2.0)  # its border towards the next index
                 (solid if i == len(ls) - 1 else dashed).append(_ro(left))
                 if i == 0:
-                    outer.append(_ro(_offset_left(shape, -ln.getWidth() / 2.0)))
+                    outer.append(_ro(_offset_left(shape, -side * ln.getWidth() / 2.0)))
         s(self, "_solid_polylines", tuple(solid))
         s(self, "_dashed_polylines", tuple(dashed))
         s(self, "_outer_polylines", tuple(outer))
@@ -315,7 +319,7 @@ class Road:
     @functools.cached_property
     def planner(self) -> RoutePlanner:
         """Route paths, links and lane pieces on this net, built on first use."""
-        return RoutePlanner(self._net, self.right_of_way)
+        return RoutePlanner(self._net, self.right_of_way, self.lefthand)
 
     @functools.cached_property
     def right_of_way(self) -> RightOfWay:
@@ -332,4 +336,14 @@ class Road:
 @functools.lru_cache(maxsize=16)
 def _load_cached(path: str, mtime_ns: int) -> Road:
     net = sumolib.net.readNet(path, withInternal=True, withPedestrianConnections=True, withPrograms=True)
-    return Road(net, source=path)
+    return Road(net, source=path, lefthand=_lefthand(path))
+
+
+def _lefthand(path: str) -> bool:
+    """The net file's ``lefthand`` attribute (SUMO's left-hand traffic; sumolib does not read it): from its
+    ``<net ...>`` element, which follows the header comment within the first few kilobytes."""
+    with (gzip.open(path, "rt", errors="replace") if path.endswith(".gz") else
+          open(path, errors="replace")) as f:
+        head = f.read(1 << 20)
+    m = re.search(r"<net\s[^>]*>", head)
+    return bool(m and re.search(r'\slefthand="(true|1)"', m.group(0)))

@@ -98,6 +98,7 @@ class LanePiece:
     #: the same junctions) when the ego's class may use it: the lane an overtaking pass borrows, m; 0 = none
     opposite_m: float = 0.0
     opposite_lane: str = ""  # that oncoming lane's id ("" = none)
+    opposite_right: bool = False  # that lane lies on the right (left-hand traffic): an oncoming pass does not borrow it
     #: inside a junction: the room (right, left) beyond the internal lane's borders before a sidewalk or
     #: walking area (within the walkway tolerance), the most the corridor may widen there, m; inf = no
     #: walkway near (and on normal edges)

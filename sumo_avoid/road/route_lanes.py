@@ -67,13 +67,14 @@ class RouteLanes:
         self._widen_s, self._widen_m = _junction_widening(self.pieces)
         room = np.array([p.kerb_room_m for p in self.pieces], float).reshape(-1, 2)
         self._kerb = room if np.isfinite(room).any() else None  # (pieces, 2) right, left; None: no walkway near
-        opp = [(q.s_start_m, q.s_end_m, 0.0 if _is_internal(q) else q.opposite_m) for q in self.pieces]
+        # (the oncoming pass is built for an oncoming lane on the left: on the right, in left-hand traffic, none is lent)
+        opp = [(q.s_start_m, q.s_end_m, 0.0 if _is_internal(q) or q.opposite_right else q.opposite_m) for q in self.pieces]
         self._opp_s = np.maximum.accumulate(np.array([x for a, b, _ in opp for x in (a, b)]) + _EPS * np.arange(2 * n))
         self._opp_w = np.array([w for _, _, w in opp for _ in (0, 1)])
 
     def opposite(self, s) -> np.ndarray:
-        """(N,) width of the oncoming lane beside the ego's lanes at arc lengths s (0: none; a
-        junction has none), m."""
+        """(N,) width of the oncoming lane beside the ego's lanes (on their left) at arc lengths s that an
+        overtaking pass may borrow (0: none; a junction has none; left-hand traffic has it on the right), m."""
         return np.interp(np.atleast_1d(np.asarray(s, float)), self._opp_s, self._opp_w)
 
     def corridor(self, s) -> tuple[np.ndarray, np.ndarray]:

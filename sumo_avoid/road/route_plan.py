@@ -34,11 +34,12 @@ class RoutePlan(NamedTuple):
 
 
 
-def _lane_centres(lanes) -> tuple[tuple[float, ...], np.ndarray]:
-    """Widths and lateral centre positions (from the right edge, m) of an edge's lanes by index
-    (lane 0 is the rightmost)."""
+def _lane_centres(lanes, lefthand: bool = False) -> tuple[tuple[float, ...], np.ndarray]:
+    """Widths and lateral centre positions (d, positive left, from lane 0's outer edge, m) of an edge's lanes
+    by index: lane 0 is the rightmost, or in left-hand traffic the leftmost (the indices grow to the right)."""
     w = np.array([float(ln.getWidth()) for ln in sorted(lanes, key=lambda ln: ln.getIndex())])
-    return tuple(w.tolist()), np.cumsum(w) - 0.5 * w
+    c = np.cumsum(w) - 0.5 * w
+    return tuple(w.tolist()), -c if lefthand else c
 
 
 def _opposite(e, vclass: str | None) -> tuple[float, str]:
@@ -134,9 +135,10 @@ def _dedupe(points: np.ndarray, tol: float = 1e-6) -> np.ndarray:
 class RoutePlanner:
     """Routes on one sumolib net (read with internal lanes and pedestrian connections)."""
 
-    def __init__(self, net, right_of_way: RightOfWay):
+    def __init__(self, net, right_of_way: RightOfWay, lefthand: bool = False):
         self._net = net
         self.right_of_way = right_of_way
+        self.lefthand = lefthand  # left-hand traffic (Road.lefthand)
 
     def route(self, edge_ids, depart_lane: int | None = None, arrival_lane: int | None = None,
               vclass: str | None = None) -> RoutePlan:
@@ -165,7 +167,7 @@ class RoutePlanner:
         for k, e in enumerate(edges):
             nxt = edges[k + 1] if k + 1 < len(edges) else None
             conn, exit_idx = self._exit(e, nxt, entry, _onward(edges, k, arrival_lane, vclass), arrival_lane, vclass)
-            self._lay_edge(e, entry, exit_idx, vclass, pieces, piece_at, limit_at)
+            self._lay_edge(e, entry, exit_idx, vclass, pieces, piece_at, limit_at, self.lefthand)
             if conn is not None:
                 n_points = sum(len(piece) for piece in pieces)
                 link_at.append((conn, n_points))
@@ -201,7 +203,8 @@ class RoutePlanner:
         return conn, int(np.clip(conn.getFromLane().getIndex(), 0, len(lanes) - 1))
 
     @staticmethod
-    def _lay_edge(e, entry, exit_idx: int, vclass, pieces: list, piece_at: list, limit_at: list) -> None:
+    def _lay_edge(e, entry, exit_idx: int, vclass, pieces: list, piece_at: list, limit_at: list,
+                  lefthand: bool = False) -> None:
         """Append edge ``e``'s points (its exit lane's shape, blended in from the entry lane over
         min(half the edge, 60 m) when they differ), its lane pieces and its speed limit."""
         lanes = e.getLanes()
@@ -211,9 +214,9 @@ class RoutePlanner:
         entry_idx = exit_idx if entry is None else int(np.clip(entry, 0, len(lanes) - 1))
         exit_shape = np.asarray(lanes[exit_idx].getShape(), float)
         limit_at.append((float(lanes[exit_idx].getSpeed()), n_points, 0.0))
-        widths, centres = _lane_centres(lanes)
+        widths, centres = _lane_centres(lanes, lefthand)
         exit_off = tuple((centres - centres[exit_idx]).tolist())
-        opp = _opposite(e, vclass)
+        opp = (*_opposite(e, vclass), lefthand)  # (in left-hand traffic the oncoming lane lies on the right)
         if entry_idx == exit_idx:
             pieces.append(exit_shape)
             piece_at.append((e.getID(), exit_idx, exit_off, exit_off, widths, allowed, opp, n_points))
