@@ -119,10 +119,21 @@ class RoadView:
         self.goal = np.array([gs[0], gd[0] - self.line.offset(gs)[0]])
         self._s: float | None = None
         self._held_free_s: float | None = None  # a held lane change: how long its lane has been free, s
+        lim = task.speed_limits
+        if lim is not None and len(lim) and lim.shape[1] > 2:
+            lim = lim[lim[:, 2] == 0.0]  # the normal lanes' legal limits (internal lanes: netconvert's turning speeds)
+        self._limits = lim if lim is not None and len(lim) else None
 
     @property
     def length_m(self) -> float:
         return self.frame.length_m
+
+    def legal_speed(self, s: float) -> float:
+        """The legal speed limit at arc length s (its normal lane's; the one before a junction runs on through
+        it), m/s; inf without limits. What a car at that limit does is cruise, not crawl."""
+        if self._limits is None:
+            return np.inf
+        return float(self._limits[max(0, int(np.searchsorted(self._limits[:, 0], s, side="right")) - 1), 1])
 
     def locate(self, xy) -> tuple[float, float]:
         """(s, d) of the ego's centre, projected near where it was last step (a path that passes

@@ -2,6 +2,7 @@
 sequences of lateral positions (no SUMO)."""
 from collections import deque
 
+import numpy as np
 import pytest
 
 from sumo_avoid.control.apf.apf_sa import ApfSaController, ApfSaParams, _EgoState
@@ -138,3 +139,17 @@ def test_the_field_keys_sit_in_the_apf_sa_table_itself_and_reach_its_driver():
     rows = describe(ApfSaParams, "controllers.apf_sa")
     apf = [r[0].replace("controllers.apf.", "controllers.apf_sa.") for r in describe(ApfParams, "controllers.apf")]
     assert [r[0] for r in rows[:len(apf)]] == apf and rows[len(apf)][0] == "controllers.apf_sa.trap_window_s"
+
+
+def test_the_legal_limit_where_the_ego_is_counts_as_cruising():
+    """APF-SA's trap detector compares progress with min(cruise, curve speed, legal limit): by hand, limits
+    13.89 m/s from 0, 8.33 from 100 m, an internal lane's turning speed 5.0 from 150 m (not a legal limit: the
+    limit before the junction runs on through it), 13.89 from 160 m."""
+    from sumo_avoid.control.road_view import RoadView
+    from sumo_avoid.core.types import EgoTask
+
+    path = np.array([[0.0, 0.0], [300.0, 0.0]])
+    lim = np.array([[0.0, 13.89, 0.0], [100.0, 8.33, 0.0], [150.0, 5.0, 1.0], [160.0, 13.89, 0.0]])
+    view = RoadView(EgoTask("ego", path[-1], path, 13.89, speed_limits=lim))
+    assert [view.legal_speed(s) for s in (0.0, 50.0, 100.0, 120.0, 155.0, 170.0)] == [13.89, 13.89, 8.33, 8.33, 8.33, 13.89]
+    assert RoadView(EgoTask("ego", path[-1], path, 13.89)).legal_speed(50.0) == np.inf
