@@ -256,8 +256,11 @@ def test_the_push_from_a_car_beside_does_not_grow_as_the_ego_turns_away():
 class _TaperingView:
     """The lanes' left bound falls from 4.8 m to 2.9 m between s = 100 and 112 m (berlin_bike_tram seed 3's
     tapering lane, as traced), the right one at -1.6 m; the goal far away."""
+    from sumo_avoid.control.road_view import RoadView
+
     goal = np.array([1000.0, 0.0])
     length_m = 1000.0
+    inside = RoadView.inside  # the clamp under test, on this corridor
 
     @staticmethod
     def corridor(s):

@@ -125,23 +125,13 @@ class ApfDriver:
         return max(self.p.lookahead_min_m, self.p.lookahead_time_s * abs(speed))
 
     def carrot(self, view: RoadView, sc: FrenetScene, lateral_offset: float = 0.0, within_m: float = np.inf) -> np.ndarray:
-        """(s, d) the attraction pulls towards (at most ``within_m`` ahead: a lateral move to finish by then).
-
-        An offset target lies inside the ego's lanes where it lies: d is kept within the corridor at
-        the carrot's s by half the car's width (the middle where the corridor is narrower than the
-        car). An offset chosen where the lanes were wide is carried forward; where a lane tapers
-        away it lay beyond the bound, the bound's push then swung the car across (berlin_bike_tram
-        seed 3: d = 3.2 m against a bound falling from 4.8 to 2.9 m, into a parked car pulling out).
-        The path's own line (offset 0) is inside its lanes by construction."""
+        """(s, d) the attraction pulls towards (at most ``within_m`` ahead: a lateral move to finish by then); an
+        offset target lies inside the lanes where it lies (:meth:`RoadView.inside`)."""
         ahead = min(self.lookahead(float(np.hypot(*sc.vel))), within_m)
         if np.hypot(*(view.goal - sc.q)) <= ahead and lateral_offset == 0.0:
             return view.goal
         s_c = min(sc.s + ahead, view.length_m)
-        if lateral_offset != 0.0:
-            lo, hi = (float(b[0]) for b in view.corridor([s_c]))
-            half = 0.5 * sc.width
-            lateral_offset = min(max(lateral_offset, lo + half), hi - half) if hi - lo >= 2 * half else 0.5 * (lo + hi)
-        return np.array([s_c, lateral_offset])
+        return np.array([s_c, view.inside(s_c, lateral_offset, 0.5 * sc.width) if lateral_offset != 0.0 else 0.0])
 
     def scene(self, obs: Observation, row: int, vid: str) -> FrenetScene:
         return self.views[vid].scene(obs, row, self.p.sense_radius_m, self.p.vru_margin_m)
