@@ -24,6 +24,7 @@ from sumo_avoid.road.gaps import GAP_MIN_M, lane_blockers, lane_change_length_m
 from sumo_avoid.core.geometry import wrap_angle
 from sumo_avoid.road.route_lanes import RouteLanes
 from sumo_avoid.road.polyline import arc_lengths
+from sumo_avoid.road.regulation import legal_limits, limit_index
 from sumo_avoid.core.types import EgoTask, Observation
 from sumo_avoid.sensing.perception import obstacle_vehicles, towards_path
 
@@ -119,10 +120,7 @@ class RoadView:
         self.goal = np.array([gs[0], gd[0] - self.line.offset(gs)[0]])
         self._s: float | None = None
         self._held_free_s: float | None = None  # a held lane change: how long its lane has been free, s
-        lim = task.speed_limits
-        if lim is not None and len(lim) and lim.shape[1] > 2:
-            lim = lim[lim[:, 2] == 0.0]  # the normal lanes' legal limits (internal lanes: netconvert's turning speeds)
-        self._limits = lim if lim is not None and len(lim) else None
+        self._limits = legal_limits(task.speed_limits)  # the normal lanes' (not netconvert's turning speeds)
 
     @property
     def length_m(self) -> float:
@@ -141,7 +139,7 @@ class RoadView:
         it), m/s; inf without limits. What a car at that limit does is cruise, not crawl."""
         if self._limits is None:
             return np.inf
-        return float(self._limits[max(0, int(np.searchsorted(self._limits[:, 0], s, side="right")) - 1), 1])
+        return float(self._limits[limit_index(self._limits, s), 1])
 
     def locate(self, xy) -> tuple[float, float]:
         """(s, d) of the ego's centre, projected near where it was last step (a path that passes

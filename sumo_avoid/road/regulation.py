@@ -7,9 +7,28 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from sumo_avoid.core.config import field_doc
 
 RED = frozenset("ru")
+
+
+def legal_limits(speed_limits, turn_speeds: bool = False):
+    """The rows of a route's ``speed_limits`` ((K, 2 or 3): s where a lane piece starts, its limit, 1 on an internal
+    lane) that are limits to keep, or None: the normal lanes' legal limits, the one before a junction running on
+    through it; a junction's internal lanes too with ``turn_speeds`` (netconvert's turning speeds, no legal limit)."""
+    lim = speed_limits
+    if lim is None or len(lim) == 0:
+        return None
+    if lim.shape[1] > 2 and not turn_speeds:
+        lim = lim[lim[:, 2] == 0.0]
+    return lim if len(lim) else None
+
+
+def limit_index(limits, s_m: float) -> int:
+    """Row of ``limits`` (:func:`legal_limits`) in force at arc length ``s_m`` (the first before the route's start)."""
+    return max(0, int(np.searchsorted(limits[:, 0], s_m, side="right")) - 1)
 STOP_SIGNS = frozenset("sw")  # stop sign, all-way stop: stand at the line, then give way
 
 

@@ -70,7 +70,7 @@ import numpy as np
 from sumo_avoid.core.geometry import near_any
 from sumo_avoid.road.crossings import stands_on_crossing
 from sumo_avoid.road.polyline import polyline_point_at, polyline_track
-from sumo_avoid.road.regulation import RED, STOP_SIGNS, RulesParams
+from sumo_avoid.road.regulation import RED, STOP_SIGNS, RulesParams, legal_limits, limit_index
 from sumo_avoid.core.types import EgoTask, Keys
 from sumo_avoid.safety.crossing_rule import CrossingRule
 from sumo_avoid.safety.junction_box import box_cap, junction_exits
@@ -128,12 +128,7 @@ def signal_char(signals, link) -> str:
 def kept_limits(task: EgoTask, p: RulesParams) -> np.ndarray | None:
     """The rows of ``task.speed_limits`` the layer keeps (None: none): the normal lanes' legal limits, the one
     before a junction running on through it; a junction's internal lanes too with ``turn_speeds``."""
-    lim = task.speed_limits
-    if not p.speed_limits or lim is None or len(lim) == 0:
-        return None
-    if lim.shape[1] > 2 and not p.turn_speeds:
-        lim = lim[lim[:, 2] == 0.0]
-    return lim if len(lim) else None
+    return legal_limits(task.speed_limits, p.turn_speeds) if p.speed_limits else None
 
 
 def road_speed_cap(task: EgoTask, s_m: float, p: RulesParams, limits=False) -> float:
@@ -144,7 +139,7 @@ def road_speed_cap(task: EgoTask, s_m: float, p: RulesParams, limits=False) -> f
         return math.inf
     b = p.comfort_decel_mps2
     starts, v = lim[:, 0], lim[:, 1] * p.speed_factor
-    here = max(0, int(np.searchsorted(starts, s_m, side="right")) - 1)
+    here = limit_index(lim, s_m)
     ahead = (starts > s_m) & (starts <= s_m + p.lookahead_m)
     caps = np.sqrt(v[ahead] ** 2 + 2.0 * b * (starts[ahead] - s_m))
     return float(min(v[here], caps.min() if caps.size else math.inf))

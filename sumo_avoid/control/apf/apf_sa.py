@@ -156,14 +156,15 @@ class ApfSaController(BaseController):
             v_road = min(drv.road_speed(view, sc), v_lane)  # waiting for a gap is not being trapped
             # a car slowed for a bend is not trapped, nor one at the legal limit (on a 30 km/h street every car ahead
             # made a trap of it: berlin_bike_tram seed 3 escaped into a lane ending 11 m on, beside a car pulling out)
-            v_ref = min(task.cruise_speed_mps, v_road, view.legal_speed(sc.s))
+            v_cruise = min(task.cruise_speed_mps, view.legal_speed(sc.s))
+            v_ref = min(v_cruise, v_road)
 
             window_full = st.history[-1][0] - st.history[0][0] >= p.trap_window_s - 1e-9
             progress = st.history[-1][1] - st.history[0][1]
             slow = progress < p.trap_progress_frac * v_ref * p.trap_window_s
             stuck_now = (force < p.trap_force_frac * f_max or fld.v_safe < 0.9 * v_ref
                          or (speed < 0.5 and math.isfinite(fld.v_safe)))
-            if window_full and progress >= p.trap_progress_frac * min(task.cruise_speed_mps, view.legal_speed(sc.s)) * p.trap_window_s:
+            if window_full and progress >= p.trap_progress_frac * v_cruise * p.trap_window_s:
                 st.failures = 0  # at cruise progress again (not merely slowed for a bend): a new trap next
             if (view.passing is None and st.escape_offset is None and window_full and slow and stuck_now
                     and t >= st.pass_checked_s + 1.0):
