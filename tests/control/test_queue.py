@@ -84,3 +84,22 @@ def test_an_escape_lane_must_run_past_the_traffic_it_passes(ends, runs_past):
     sc = _scene([(68.0, 0.0, 3.0), (76.0, 0.0, 0.0), (90.0, 0.0, 0.0)])
     assert lane_runs_past(_View(ends), sc, 3.2) == runs_past
     assert lane_runs_past(_View(ends), sc, 0.0)  # the ego's own lane always runs on
+
+
+@pytest.mark.parametrize("length_m, speed, runs_past", [
+    (500.0, 4.5, True),  # the path runs on: the lane runs past
+    (91.0, 4.5, False),  # the path ends at 91 m, before 91.05: moving, no lane past the chain
+    (92.0, 4.5, True),  # ends just after it
+    (91.0, 0.0, True),  # standing, it may (it backs up for the room first)
+])
+def test_no_escape_at_speed_where_the_path_ends_before_the_lane_runs_past(length_m, speed, runs_past):
+    """The chain above ends at 78.25; past it means 91.05 (78.25 + 4.8 + CHAIN_GAP_M). A moving ego whose path (its
+    goal) ends before that would stop at the end with its lane change half done (bologna_bus_lane, seed 3)."""
+    from sumo_avoid.control.apf.queue import lane_runs_past
+
+    sc = _scene([(68.0, 0.0, 3.0), (76.0, 0.0, 0.0), (90.0, 0.0, 0.0)])
+    sc = FrenetScene(sc.s, sc.d, sc.heading, np.array([speed, 0.0]), sc.length, sc.width, sc.o_pos, sc.o_heading,
+                     sc.o_length, sc.o_width, sc.o_vel, sc.corridor)
+    view = _View(200.0)
+    view.length_m = length_m
+    assert lane_runs_past(view, sc, 3.2) == runs_past

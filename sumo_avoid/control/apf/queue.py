@@ -81,8 +81,17 @@ def lane_runs_past(view, sc, offset_m: float) -> bool:
     An escape into a lane that leaves the route's corridor before that only leads back into the same
     traffic (lyon_unseen, truth, seed 2, car74: in a queue moving off at 2-5 m/s towards a light 36 m on,
     it escaped into the next lane, which the route leaves at the junction, drove up it at 9.5 m/s, met
-    the red and cut back into the queue, now standing, in a 3 m gap: contact)."""
-    s_end = min(chain_end_s(sc) + sc.length + CHAIN_GAP_M, view.length_m)
+    the red and cut back into the queue, now standing, in a 3 m gap: contact).
+
+    Where the path ends (the goal) before that point, a moving ego has no lane past the chain: its lane change
+    would end where it must stop, not straight in the next lane (bologna_bus_lane, truth, seed 3: braking at
+    4.5 m/s behind a car stopping at the red light at the end of its route, 10 m ahead, it escaped towards the
+    free lane beside it, stood there 34 degrees askew and a passing car clipped it). Standing, it may (it backs up
+    for the room first, ``ApfSaController._make_room``); a queue there holds it for its patience first."""
+    s_end = chain_end_s(sc) + sc.length + CHAIN_GAP_M
+    if s_end > view.length_m and float(np.hypot(*sc.vel)) >= STAND_MPS:
+        return False
+    s_end = min(s_end, view.length_m)
     s = np.arange(sc.s, s_end + 1.0, 1.0)
     lo, hi = view.corridor(s)
     half = 0.5 * sc.width
