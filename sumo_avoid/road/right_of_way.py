@@ -93,6 +93,28 @@ class RightOfWay:
                     out.append(foe)
         return tuple(out)
 
+    def crossers(self, conn) -> tuple[FoeLink, ...]:
+        """The links from ``conn``'s own edge -- another lane, another exit lane -- whose internal lanes cross
+        its own although neither link gives way to the other in the junction logic, each with its whole
+        approach. netconvert joins junctions into clusters whose internal lanes run so (the unseen Sao Paulo
+        district: a left turn from the left lane swings across the straight-on from the lane beside it, both
+        green at once; SUMO's left-turners drove into the ego twice). SUMO lets both go and its drivers do not
+        see the ego there; the ego lets such a car go first (``safety/traffic.py``)."""
+        node = conn.getFrom().getToNode()
+        if node.getType() == UNREGULATED or not _has_logic(node):
+            return ()  # unregulated: every crossing link is a foe already (foes)
+        mine = self.via_chain(conn)
+        line = _chain_line(mine)
+        out = []
+        for other in node.getConnections():
+            if (other.getFrom() is not conn.getFrom() or other.getFromLane() is conn.getFromLane()
+                    or other.getToLane() is conn.getToLane() or node.forbids(other, conn) or node.forbids(conn, other)):
+                continue
+            chain = self.via_chain(other)
+            if chain and _crosses(_chain_line(chain), line):
+                out.append(self._foe(other, chain, mine))
+        return tuple(out)
+
     def wait_s(self, conn, path, cum, s_stop_m: float, clear_m: float, half_width_m: float) -> float:
         """Where on the ego's ``path`` (arc lengths ``cum``) a car on ``conn`` waits inside the junction
         for the links with priority that cross it: the farthest arc length from the stop line on whose

@@ -62,6 +62,9 @@ class RouteLink:
     # where the ego waits for the junction: the stop line, or before it where other links' turns sweep the stop
     # line (right_of_way.RightOfWay.hold_s), m; nan = the stop line
     s_hold_m: float = float("nan")
+    # links from the ego's own edge (another lane, another exit) whose internal lanes cross its own though the
+    # junction logic makes neither give way (sumo.right_of_way.RightOfWay.crossers): the ego lets them go first
+    crossers: tuple[FoeLink, ...] = ()
 
     def hold_line_m(self, s_front_m: float, v_mps: float, decel_mps2: float, margin_m: float) -> float:
         """The line the ego waits at: :attr:`s_hold_m` when it can still stop ``margin_m`` before it braking at

@@ -268,7 +268,8 @@ class RoutePlanner:
                          crossing_links(self._net, conn, path, cum, s_stop_m - CROSSING_REACH_M,
                                         s_stop_m + through + CROSSING_REACH_M), float(wait),
                          self.right_of_way.inside(conn),
-                         self.right_of_way.hold_s(conn, path, cum, s_stop_m, HOLD_CLEAR_M, WAIT_HALF_WIDTH_M, HOLD_BACK_M))
+                         self.right_of_way.hold_s(conn, path, cum, s_stop_m, HOLD_CLEAR_M, WAIT_HALF_WIDTH_M, HOLD_BACK_M),
+                         self.right_of_way.crossers(conn))
 
     def _oncoming(self, edge, conn=None) -> tuple[OncomingLane, ...]:
         """The lane bordering ``edge`` on every edge that runs the other way between the same two

@@ -27,6 +27,11 @@ Per ego and step, with s the arc length of the ego's front bumper projected on i
   treat it as a link leader). SUMO's vehicles enter when they see no SUMO-driven foe coming, and an
   ego standing at its line is none; one standing inside (waiting at its internal stop for the ego)
   does not hold it.
+* **Crossing lanes of its own edge.** On any link the ego is held the same way while a vehicle of an
+  open link from another lane of its own edge whose internal lanes cross its own (though the junction
+  logic makes neither give way: :attr:`~sumo_avoid.road.route.RouteLink.crossers`, joined junctions)
+  would reach the crossing within that gap, counted from its stop line too: SUMO lets both go at once
+  and its drivers do not look for the ego there. Other egos are left out (each would wait for the other).
 * **Junction box.** Before the nearest link ahead the ego is held at its stop line while a vehicle stands
   in the strip it would sweep through the junction, or the exit lacks room for it (SUMO's drivers do not
   enter a junction they could not leave; :mod:`sumo_avoid.safety.junction_box`).
@@ -171,7 +176,7 @@ class TrafficRulesLayer:
         wide = wide_exits(task, self._turn_radius_m)
         narrow = narrow_stretches(task) if task.lanes else ()
         limits = kept_limits(task, self.p)
-        watch = (any(lk.tls or lk.foes or lk.inside or lk.state in STOP_SIGNS or lk.crossings for lk in task.links) or bool(wide)
+        watch = (any(lk.tls or lk.foes or lk.inside or lk.crossers or lk.state in STOP_SIGNS or lk.crossings for lk in task.links) or bool(wide)
                  or bool(narrow) or limits is not None)
         exits = junction_exits(task) if task.lanes else ()
         self._egos[task.vid] = e = _Ego(task, watch or any(x == x for x in exits), wide=wide, narrow=narrow, exits=exits,
@@ -265,6 +270,13 @@ class TrafficRulesLayer:
                 clearing = clearing_arrivals(link.inside, lanes, snap.lane_pos, snap.speed, snap.length, {row})
                 if min(clearing, default=math.inf) < (ego_time_to_line(d, v, p.stop_margin_m) + critical_gap_s(link, p)
                                                        + p.gap_margin_s):
+                    return _brake_to(d_hold, p), link.s_stop_m
+            if link.crossers and d > 0 and not late:  # a link of its own edge crossing its path goes first, on any link
+                found = foe_arrivals(link.crossers, snap.signals, lanes, snap.lane_pos, snap.speed, snap.length,
+                                     set(np.flatnonzero(snap.is_ego).tolist()), None,
+                                     (snap.time_s, p.standing_foe_wait_s, self._standing_since(snap)))
+                if min((a for a, _, _ in found), default=math.inf) < (ego_time_to_line(d, v, p.stop_margin_m)
+                                                                      + critical_gap_s(link, p) + p.gap_margin_s):
                     return _brake_to(d_hold, p), link.s_stop_m
             if not link.foes:
                 continue
