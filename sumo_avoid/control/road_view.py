@@ -32,9 +32,6 @@ from sumo_avoid.sensing.perception import obstacle_vehicles, towards_path
 MAX_ABS_D_M = 20.0
 #: A vehicle whose footprint stays this far outside the ego's lanes is no obstacle to it, m.
 OUTSIDE_MARGIN_M = 0.2
-#: A person on a walkway whose body reaches more than this into the ego's lanes is on the carriageway (SUMO puts
-#: people waiting at a corner up to 0.2 m into the lane), m
-KERB_INTRUDE_M = 0.3
 #: On a drivable line the bounds of the lanes stay at least this far from a car on it, m.
 LINE_CLEAR_M = 1.0
 #: On a drivable line, the speed leaves this share of the largest yaw rate for corrections.
@@ -284,16 +281,11 @@ class RoadView:
             # oncoming lane beside a wide exit is not left out)
             half = 0.5 * (np.abs(np.sin(o_rel)) * o_len + np.abs(np.cos(o_rel)) * o_wid)
             lo, hi = self.lane_bounds(os_) if self.lanes is not None else self.corridor(os_)
-            # a person on a walkway whose body reaches deep into the ego's lanes stands on the carriageway
-            # (netconvert's joined junctions lay walking areas over the lanes: the unseen Sao Paulo district, a
-            # person waiting 0.9 m from the lane's centre line, passed at its size and struck by two egos)
-            kerb = kerb & (np.minimum(od + half - lo, hi - (od - half)) <= KERB_INTRUDE_M)
             off = self.line.offset(os_)  # where the drivable line swings out, so does the room the car may use
             line_lo, line_hi = self.corridor(os_)
             lo, hi = np.minimum(lo, line_lo + off), np.maximum(hi, line_hi + off)
             keep = (od + half > lo - OUTSIDE_MARGIN_M) & (od - half < hi + OUTSIDE_MARGIN_M)
             os_, od, o_rel, o_len, o_wid, o_vel = os_[keep], od[keep], o_rel[keep], o_len[keep], o_wid[keep], o_vel[keep]
-            road = ~kerb[keep] & (np.asarray(vru, float)[keep] > 0.0)  # (a person on the carriageway: all its margin)
             kerb = kerb[keep]
             # a person or cyclist in or at the ego's lanes counts as grown by vru_margin_m all round (one
             # on the sidewalk beside them is behind the bound, as above: the ego passes it, not crawls), a
@@ -301,7 +293,7 @@ class RoadView:
             # path; one walking along the kerb is passed at its size (signal_crossing_right, radar, seed 1:
             # pushed 0.65 m over by people walking on the sidewalk, the ego met a car in the next lane)
             vs, vd = self.frame.velocity_to_frenet(os_, od, o_vel)
-            grow = 2.0 * vru_margin_m * towards_path(np.where(road, 1.0, np.asarray(vru, float)[keep]), vd * np.sign(d_raw - od))
+            grow = 2.0 * vru_margin_m * towards_path(np.asarray(vru, float)[keep], vd * np.sign(d_raw - od))
             o_len, o_wid = o_len + grow, o_wid + grow
             od, o_rel, o_vel = self._from_line(os_, od, o_rel, np.column_stack([vs, vd]))
             o_pos = np.column_stack([os_, od])
