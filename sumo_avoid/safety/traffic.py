@@ -248,6 +248,7 @@ class TrafficRulesLayer:
         """(speed cap, s of the yield line that sets it): stop before the next link that must give
         way while a foe with priority arrives within the critical gap (:mod:`.yielding`)."""
         p = self.p
+        standing = (snap.time_s, p.standing_foe_wait_s, self._standing_since(snap))  # foes standing for good
         for k, link in enumerate(e.task.links):
             d = link.s_stop_m - e.s_m
             if d <= 0 and e.s_m >= link.yield_line_m:
@@ -264,19 +265,17 @@ class TrafficRulesLayer:
             wide = e.wide.get(k)
             if (wide is not None and not late and d > 0 and
                     oncoming_first(wide, e.s_m, lanes, snap.lane_pos, snap.speed,
-                                   (snap.time_s, p.standing_foe_wait_s, self._standing_since(snap)), row) < p.gap_margin_s):
+                                   standing, row) < p.gap_margin_s):
                 return _brake_to(d_hold, p), link.s_stop_m
+            within = ego_time_to_line(d, v, p.stop_margin_m) + critical_gap_s(link, p) + p.gap_margin_s
             if link.inside and d > 0 and not late:  # who is in the junction clears it first, on any link
                 clearing = clearing_arrivals(link.inside, lanes, snap.lane_pos, snap.speed, snap.length, {row})
-                if min(clearing, default=math.inf) < (ego_time_to_line(d, v, p.stop_margin_m) + critical_gap_s(link, p)
-                                                       + p.gap_margin_s):
+                if min(clearing, default=math.inf) < within:
                     return _brake_to(d_hold, p), link.s_stop_m
             if link.crossers and d > 0 and not late:  # a link of its own edge crossing its path goes first, on any link
                 found = foe_arrivals(link.crossers, snap.signals, lanes, snap.lane_pos, snap.speed, snap.length,
-                                     set(np.flatnonzero(snap.is_ego).tolist()), None,
-                                     (snap.time_s, p.standing_foe_wait_s, self._standing_since(snap)))
-                if min((a for a, _, _ in found), default=math.inf) < (ego_time_to_line(d, v, p.stop_margin_m)
-                                                                      + critical_gap_s(link, p) + p.gap_margin_s):
+                                     set(np.flatnonzero(snap.is_ego).tolist()), None, standing)
+                if min((a for a, _, _ in found), default=math.inf) < within:
                     return _brake_to(d_hold, p), link.s_stop_m
             if not link.foes:
                 continue
@@ -289,7 +288,6 @@ class TrafficRulesLayer:
                 continue  # priority now, or too late to stop: go on
             order = (snap.time_s, e.stopped.get(k, math.inf),  # all-way stops: the ego first stood at its line then
                      lambda r: self._stand.get(snap.ids[r], (math.nan, math.nan)))
-            standing = (snap.time_s, p.standing_foe_wait_s, self._standing_since(snap))
             found = foe_arrivals(link.foes, snap.signals, lanes, snap.lane_pos, snap.speed, snap.length, {row}, order,
                                  standing)
             arrivals = [a for a, _, _ in found]
