@@ -52,3 +52,29 @@ def test_creeping_the_command_turns_towards_the_road(v_safe, course_deg):
     else:
         assert np.hypot(*v) == pytest.approx(v_safe)
         assert np.degrees(np.arctan2(v[1], v[0])) == pytest.approx(course_deg, abs=1e-9)
+
+
+def _cyclist_scene(clear_m: float) -> FrenetScene:
+    """The ego (4.5 x 1.8 m, standing) at s 100, d 0; a cyclist (1.6 x 0.65 m, grown by the 1 m VRU margin on
+    every side: 3.6 x 2.65 m) standing at 45 degrees to the road 3 m ahead, its body ``clear_m`` right of the
+    ego's side. Its body's half span across the road: 0.5 (1.6 + 0.65) sin 45 = 0.7955 m."""
+    d = -(0.9 + clear_m + 0.5 * (1.6 + 0.65) * np.sqrt(0.5))
+    return FrenetScene(100.0, 0.0, 0.0, np.zeros(2), 4.5, 1.8, np.array([[103.0, d]]), np.array([np.pi / 4]),
+                       np.array([3.6]), np.array([2.65]), np.zeros((1, 2)),
+                       lambda s: (np.full(len(s), -10.0), np.full(len(s), 10.0)), np.array([2.0]), 0.0, np.array([False]))
+
+
+def test_the_body_span_leaves_out_the_margin_of_a_turned_box():
+    lo, hi = _cyclist_scene(0.8).body_span()
+    assert (lo[0], hi[0]) == pytest.approx((-0.9 - 0.8 - 2 * 0.7955, -1.7), abs=1e-4)
+
+
+@pytest.mark.parametrize("clear_m, v_safe", [(0.8, 2.0), (0.3, 0.0)])
+def test_a_cyclist_standing_turned_beside_the_strip_is_passed_at_a_crawl(clear_m, v_safe):
+    # the grown box, turned 45 degrees, reaches 0.5 (3.6 + 2.65) sin 45 = 2.21 m from its centre: 0.61 m into
+    # the ego's strip at clear_m 0.8, and its rear 0.79 m ahead of the ego's centre, beside its front. Its body
+    # is 0.8 m clear (> gov_margin 0.4): passed at squeeze_speed_mps 2.0 (before: counted as in the strip with
+    # no gap, v_safe 0, for good). 0.3 m clear (< 0.4): in the strip, the ego stands
+    drv = ApfDriver(ApfParams(), Context(seed=1, step_s=0.1))
+    fld = drv.field(_cyclist_scene(clear_m), np.array([[100.0, 0.0]]), np.array([115.0, 0.0]))
+    assert fld.v_safe == pytest.approx(v_safe)

@@ -248,12 +248,13 @@ class ApfDriver:
         # a person or cyclist standing beside the strip, in it only by its margin: passed at a crawl, not waited
         # for (berlin_eastbound, radar, seed 2: a cyclist queued in the next lane behind a parked car, 0.57 m
         # from the ego's side, stopped it for good, and the cyclist waited for the ego to pass)
-        g = 0.5 * np.tile(sc.o_grow if sc.o_grow is not None else np.zeros(O), C)
+        grow = sc.o_grow if sc.o_grow is not None else np.zeros(O)
         standing = o_speed < VRU_STAND_MPS
         # (the ego taken as aligned with the road, as for a squeeze: turned, it stood for good with its front in
         # the margin, berlin_eastbound, truth, seed 2)
-        vru_beside = ~beside & (g > 0.0) & standing & (lat_closing <= p.squeeze_closing_mps) & (
-            (a_lo - p.gov_margin_m > o_hi - g) | (a_hi + p.gov_margin_m < o_lo + g))
+        body_lo, body_hi = sc.body_span()
+        vru_beside = ~beside & np.tile(grow > 0.0, C) & standing & (lat_closing <= p.squeeze_closing_mps) & (
+            (a_lo - p.gov_margin_m > np.tile(body_hi, C)) | (a_hi + p.gov_margin_m < np.tile(body_lo, C)))
         crawl = crawl | vru_beside
         beside = beside | squeeze | vru_beside
         # one squeezed past that the ego must move over for (shift > 0) pushes straight across the road,
