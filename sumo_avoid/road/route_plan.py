@@ -89,20 +89,46 @@ def kerb_room(plan: RoutePlan, on_walkway, reach_m: float = KERB_REACH_M, step_m
     return tuple(out)
 
 
-def _onward(edges, k: int, arrival_lane: int | None, vclass: str | None) -> tuple[int, ...]:
-    """Lane indices of ``edges[k + 1]`` from which the route goes on without changing lanes: those
-    with a connection ``vclass`` may use to ``edges[k + 2]``, or on the last edge the arrival lane
-    (every lane the class may use without one); () when there is no next edge or no such lane."""
-    if k + 1 >= len(edges):
-        return ()
-    nxt = edges[k + 1]
-    if k + 2 == len(edges):
-        if arrival_lane is not None:
-            return (int(arrival_lane),)
-        return tuple(ln.getIndex() for ln in nxt.getLanes() if vclass is None or ln.allows(vclass))
-    conns = nxt.getConnections(edges[k + 2])
-    return tuple(sorted({c.getFromLane().getIndex() for c in conns
-                         if vclass is None or (c.getFromLane().allows(vclass) and c.getToLane().allows(vclass))}))
+def _usable(conns, vclass: str | None) -> list:
+    """The connections ``vclass`` may use (both lanes allow it), or all of them when it may use none (a class no
+    connection admits keeps SUMO's route as it is)."""
+    mine = [c for c in conns if vclass is None or (c.getFromLane().allows(vclass) and c.getToLane().allows(vclass))]
+    return mine or list(conns)
+
+
+def _blend_m(e) -> float:
+    """How long the path's change from one lane to another on edge ``e`` is: min(half the edge, 60 m)."""
+    return min(0.5 * float(e.getLength()), 60.0)
+
+
+def lane_costs(edges, arrival_lane: int | None, vclass: str | None) -> list[dict[int, tuple[int, float]]]:
+    """Per edge k, for each lane index the path may enter ``edges[k]`` by: (the lane changes the rest of the route
+    needs from there, their steepness: the sum over them of lanes changed / the length of the edge's blend,
+    1/m), worked backwards from the arrival lane (every lane ``vclass`` may use when none is given). Planning
+    with them changes lanes where the route needs as few changes as any, and of those where they are least
+    steep: on a long edge, not on the short piece a net splits off before a junction (with the lane changed
+    only on the edge before the one that needs it, unseen Chiang Mai car118 crossed a 15 m edge at 21 degrees
+    into a queue, stood on the diagonal and was clipped twice in the lane it left)."""
+    last = edges[-1]
+    lanes = sorted(last.getLanes(), key=lambda ln: ln.getIndex())
+    goals = ([int(arrival_lane)] if arrival_lane is not None else
+             [ln.getIndex() for ln in lanes if vclass is None or ln.allows(vclass)] or [ln.getIndex() for ln in lanes])
+    n = {ln.getIndex(): min(abs(ln.getIndex() - g) for g in goals) for ln in lanes}
+    costs = [{i: (k, k / _blend_m(last)) for i, k in n.items()}]
+    for k in range(len(edges) - 2, -1, -1):
+        e, onward = edges[k], costs[0]
+        here: dict[int, tuple[int, float]] = {}
+        for c in _usable(e.getConnections(edges[k + 1]), vclass):
+            to = onward.get(c.getToLane().getIndex())
+            if to is None:
+                continue
+            j = c.getFromLane().getIndex()
+            for ln in e.getLanes():
+                m = abs(ln.getIndex() - j)
+                cand = (m + to[0], round(m / _blend_m(e) + to[1], 9))
+                here[ln.getIndex()] = min(here.get(ln.getIndex(), cand), cand)
+        costs.insert(0, here)
+    return costs
 
 
 def _turning(conn, via_lanes) -> float:
@@ -164,9 +190,10 @@ class RoutePlanner:
         limit_at: list[tuple[float, int, float]] = []  # (speed limit, points before its lane piece, 1: a turning speed)
         piece_at: list[tuple] = []  # (edge, lane, offsets at start, offsets at end, widths, allowed, (opposite width, lane), points before it)
         entry = depart_lane
+        costs = lane_costs(edges, arrival_lane, vclass)
         for k, e in enumerate(edges):
             nxt = edges[k + 1] if k + 1 < len(edges) else None
-            conn, exit_idx = self._exit(e, nxt, entry, _onward(edges, k, arrival_lane, vclass), arrival_lane, vclass)
+            conn, exit_idx = self._exit(e, nxt, entry, costs[k + 1] if nxt is not None else {}, arrival_lane, vclass)
             self._lay_edge(e, entry, exit_idx, vclass, pieces, piece_at, limit_at, self.lefthand)
             if conn is not None:
                 n_points = sum(len(piece) for piece in pieces)
@@ -180,26 +207,29 @@ class RoutePlanner:
                 entry = conn.getToLane().getIndex()
         return self._plan(pieces, link_at, limit_at, piece_at)
 
-    def _exit(self, e, nxt, entry, onward, arrival_lane, vclass):
+    def _exit(self, e, nxt, entry, onward: dict, arrival_lane, vclass):
         """(the connection to edge ``nxt`` the path takes, None on the last edge; the lane index it
-        leaves ``e`` by): of the connections ``vclass`` may use, the one from the lane nearest the entry
-        lane; of those, the one into the lane nearest to the lanes ``onward`` of ``nxt`` (those that go on
-        along the route, see :func:`_onward`), then the smoothest (the least turning, :func:`_turning`:
-        where one lane fans out into several, the lane that runs on rather than one reached by a jog)."""
+        leaves ``e`` by): of the connections ``vclass`` may use, the one after which the route needs the fewest
+        lane changes in all (here and ``onward``, :func:`lane_costs` of ``nxt``), of those the least steep ones,
+        of those the one from the lane nearest the entry lane (a change is left to a later edge where that is as
+        good), then the smoothest (the least turning, :func:`_turning`: where one lane fans out into several,
+        the lane that runs on rather than one reached by a jog)."""
         lanes = e.getLanes()
         if nxt is None:
             exit_idx = arrival_lane if arrival_lane is not None else (entry if entry is not None else
                                                                       _first_allowed(lanes, vclass))
             return None, int(np.clip(exit_idx, 0, len(lanes) - 1))
-        conns = e.getConnections(nxt)
-        mine = [c for c in conns if vclass is None or (c.getFromLane().allows(vclass) and c.getToLane().allows(vclass))]
-        conns = mine or conns  # a class no connection admits keeps SUMO's route as it is
+        conns = _usable(e.getConnections(nxt), vclass)
         if not conns:
             raise ValueError(f"no connection {e.getID()} -> {nxt.getID()}")
         ref = entry if entry is not None else 0
-        conn = min(conns, key=lambda c: (abs(c.getFromLane().getIndex() - ref),
-                                         min((abs(c.getToLane().getIndex() - i) for i in onward), default=0),
-                                         round(_turning(c, self.right_of_way.via_chain(c)), 3), c.getFromLane().getIndex()))
+        far = (10**6, 0.0)  # into a lane from which the route cannot go on
+
+        def key(c):
+            m, to = abs(c.getFromLane().getIndex() - ref), onward.get(c.getToLane().getIndex(), far)
+            return (m + to[0], round(m / _blend_m(e) + to[1], 9), m,
+                    round(_turning(c, self.right_of_way.via_chain(c)), 3), c.getFromLane().getIndex())
+        conn = min(conns, key=key)
         return conn, int(np.clip(conn.getFromLane().getIndex(), 0, len(lanes) - 1))
 
     @staticmethod
