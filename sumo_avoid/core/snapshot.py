@@ -13,7 +13,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from sumo_avoid.core.levels import has_levels, same_level
+from sumo_avoid.core.levels import apart_mask, has_levels, same_level
 
 
 def _frozen(a, dtype=float) -> np.ndarray:
@@ -45,6 +45,8 @@ class Snapshot:
     vclass: tuple[str, ...] = ()  # (N,) SUMO vehicle class ("passenger", "bicycle", "bus", "pedestrian", ...; "" = not known)
     is_person: np.ndarray | None = None  # (N,) bool, a person (not a vehicle); default none is
     z: np.ndarray | None = None  # (N,) height of the position SUMO reports, m (core.levels; default 0)
+    #: edge -> the edges crossing it without a junction (road.grade: two levels whatever the heights; default none)
+    apart: Mapping[str, frozenset] = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self):
         n = len(self.ids)
@@ -64,7 +66,7 @@ class Snapshot:
         object.__setattr__(self, "is_person", _frozen(person, bool).reshape(n))
         z = np.zeros(n) if self.z is None or len(self.z) != n else self.z
         object.__setattr__(self, "z", _frozen(z).reshape(n))
-        object.__setattr__(self, "_levels", has_levels(self.z))
+        object.__setattr__(self, "_levels", has_levels(self.z) or bool(self.apart))
 
     @property
     def n(self) -> int:
@@ -76,11 +78,12 @@ class Snapshot:
         return self._levels
 
     def same_level(self, row: int, rows=None) -> np.ndarray:
-        """Which rows (all, or ``rows``) share row ``row``'s level (core.levels); all on a flat net."""
+        """Which rows (all, or ``rows``) share row ``row``'s level (core.levels: their heights; road.grade: not on an edge
+        crossing row's without a junction); all on a flat net without such crossings."""
         rows = np.arange(self.n) if rows is None else np.asarray(rows, int)
         if not self._levels:
             return np.ones(len(rows), bool)
-        return same_level(self.z[rows], self.z[row])
+        return same_level(self.z[rows], self.z[row]) & ~apart_mask(self.apart, self.lane[row], [self.lane[r] for r in rows])
 
     def with_velocities(self, vel) -> Snapshot:
         """This snapshot with velocities ``vel`` (N, 2) (those the relaxation actuator holds); every other

@@ -32,7 +32,7 @@ import numpy as np
 import pandas as pd
 from scipy.spatial import cKDTree
 
-from sumo_avoid.core.levels import has_levels, same_level
+from sumo_avoid.core.levels import apart_pairs, has_levels, same_level
 
 WIDEN = 1.0 + 1e-9  # relative widening of a search radius
 SLACK_M = 1e-9  # absolute widening, m
@@ -52,6 +52,8 @@ class Rows:
     ids: np.ndarray  # str (object), the ``id`` column
     is_ego: np.ndarray  # bool
     z: np.ndarray | None = None  # height, m (the ``z`` column; None: a flat net, all 0)
+    lane: np.ndarray | None = None  # SUMO lane id (the ``lane`` column; with ``apart``: pairs on crossing edges drop out)
+    apart: dict | None = None  # edges crossing without a junction (road.grade: two levels whatever the heights)
     uniq: np.ndarray = field(init=False)  # distinct steps, ascending
     rank: np.ndarray = field(init=False)  # index of each row's step in uniq
     order_pos: np.ndarray = field(init=False)  # position of each row when sorted by (step, id), stable
@@ -78,11 +80,14 @@ class Rows:
         self._found = (-np.inf, None, None)  # widest search so far: radius, i, j
 
     @classmethod
-    def of(cls, traj: pd.DataFrame) -> "Rows":
+    def of(cls, traj: pd.DataFrame, apart=None) -> "Rows":
+        """The table's rows; with ``apart`` (``Road.apart``) and a ``lane`` column, pairs on edges crossing without a
+        junction are on two levels."""
         col = {c: traj[c].to_numpy(dtype=float) for c in ("x", "y", "heading", "length", "width", "time_s")}
+        lane = traj["lane"].fillna("").astype(str).to_numpy(dtype=object) if apart and "lane" in traj else None
         return cls(**col, step=traj["step"].to_numpy(dtype=np.int64),
                    ids=traj["id"].astype(str).to_numpy(dtype=object), is_ego=traj["is_ego"].to_numpy(dtype=bool),
-                   z=traj["z"].to_numpy(dtype=float) if "z" in traj else None)
+                   z=traj["z"].to_numpy(dtype=float) if "z" in traj else None, lane=lane, apart=apart or None)
 
     def _tree(self, egos: bool):
         """cKDTree of the ego (or non-ego) rows in the stacked coordinates, and those rows."""
@@ -118,5 +123,8 @@ class Rows:
         i, j = np.concatenate(i).astype(np.int64), np.concatenate(j).astype(np.int64)
         if self.z is not None and has_levels(self.z):  # only pairs on one level (core.levels)
             keep = same_level(self.z[i], self.z[j])
+            i, j = i[keep], j[keep]
+        if self.lane is not None and self.apart:  # ... also by the net's topology (road.grade)
+            keep = ~apart_pairs(self.apart, self.lane[i], self.lane[j])
             i, j = i[keep], j[keep]
         return i, j

@@ -45,7 +45,13 @@ def ego_class(run: RunResult, vid: str) -> str | None:
 
 def pair_rows(run: RunResult) -> Rows:
     """The table's columns and k-d tree pair search shared by collisions, min_gap and phi_coll."""
-    return run.memo("pair_rows", lambda: Rows.of(run.traj))
+    return run.memo("pair_rows", lambda: Rows.of(run.traj, road_apart(run)))
+
+
+def road_apart(run: RunResult) -> dict:
+    """Edges crossing without a junction on the run's net (road.grade; none in an arena)."""
+    road = getattr(run, "road", None)
+    return road.apart if road is not None and getattr(road, "_net", None) is not None else {}
 
 
 def ego_rows(run: RunResult) -> EgoRows:
@@ -109,7 +115,7 @@ class Collisions(Metric):
 
 def person_pairs(run: RunResult):
     """Every (ego, person) pair at one recorded step with its gap (metrics.vru), computed once per run."""
-    return run.memo("person_pairs", lambda: vru.ego_person_pairs(run.traj, run.persons))
+    return run.memo("person_pairs", lambda: vru.ego_person_pairs(run.traj, run.persons, road_apart(run)))
 
 
 def all_collision_events(run: RunResult):
@@ -205,7 +211,7 @@ class VulnerableRoadUsers(Metric):
     def compute(self, run: RunResult) -> dict:
         ev = all_collision_events(run)
         hit = int(ev["other_class"].isin(vru.VRU_CLASSES).sum()) if "other_class" in ev else 0
-        gap = vru.min_gap_vru_m(person_pairs(run), vru.cyclist_gaps(run.traj, run.classes))
+        gap = vru.min_gap_vru_m(person_pairs(run), vru.cyclist_gaps(run.traj, run.classes, road_apart(run)))
         return {"vru_collisions": hit, "min_gap_vru_m": gap}
 
 

@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from sumo_avoid.core.geometry import convex_distance, footprint_corners
-from sumo_avoid.core.levels import same_level
+from sumo_avoid.core.levels import apart_pairs, same_level
 from sumo_avoid.road.elements import VRU_CLASSES
 
 PERSON_EVENT_COLS = ["step", "time_s", "a", "b", "x", "y"]
@@ -41,20 +41,24 @@ def rectangle_point_distance(cx, cy, heading, length, width, px, py) -> np.ndarr
                     np.maximum(across - 0.5 * np.asarray(width, float), 0.0))
 
 
-def ego_person_pairs(traj: pd.DataFrame, persons: pd.DataFrame | None) -> pd.DataFrame:
+def ego_person_pairs(traj: pd.DataFrame, persons: pd.DataFrame | None, apart=None) -> pd.DataFrame:
     """Every (ego, person) pair present at one recorded step, with the gap between the ego's
     footprint and the person's disc (m, negative = overlap). Columns: step, time_s, ego, person,
-    gap_m, x, y (the midpoint of the two centres)."""
+    gap_m, x, y (the midpoint of the two centres). Pairs on two levels are left out (heights; with ``apart``,
+    ``Road.apart``, also edges crossing without a junction: road.grade)."""
     cols = ["step", "time_s", "ego", "person", "gap_m", "x", "y"]
     if persons is None or persons.empty or traj.empty:
         return pd.DataFrame(columns=cols)
     levels = "z" in traj and "z" in persons  # heights recorded: pairs on one level only (core.levels)
+    lanes = bool(apart) and "lane" in traj and "lane" in persons
     ego = traj.loc[traj["is_ego"].astype(bool), ["step", "time_s", "id", "x", "y", "heading", "length", "width"]
-                   + (["z"] if levels else [])]
-    per = persons[["step", "id", "x", "y", "length", "width"] + (["z"] if levels else [])]
+                   + (["z"] if levels else []) + (["lane"] if lanes else [])]
+    per = persons[["step", "id", "x", "y", "length", "width"] + (["z"] if levels else []) + (["lane"] if lanes else [])]
     m = ego.merge(per, on="step", suffixes=("_e", "_p"))
     if levels:
         m = m[same_level(m["z_e"].to_numpy(float), m["z_p"].to_numpy(float))]
+    if lanes:
+        m = m[~apart_pairs(apart, m["lane_e"].fillna("").astype(str), m["lane_p"].fillna("").astype(str))]
     if m.empty:
         return pd.DataFrame(columns=cols)
     d = rectangle_point_distance(m["x_e"].to_numpy(), m["y_e"].to_numpy(), m["heading"].to_numpy(),
@@ -84,7 +88,7 @@ def person_contact_events(traj: pd.DataFrame, pairs: pd.DataFrame) -> pd.DataFra
     return c.loc[~cont, PERSON_EVENT_COLS].sort_values(["step", "a", "b"], kind="stable").reset_index(drop=True)
 
 
-def cyclist_gaps(traj: pd.DataFrame, classes: dict) -> np.ndarray:
+def cyclist_gaps(traj: pd.DataFrame, classes: dict, apart=None) -> np.ndarray:
     """Gaps (m) between each ego's footprint and each VRU vehicle (cyclist, ...) at the same step."""
     if traj.empty or not classes:
         return np.zeros(0)
@@ -92,10 +96,13 @@ def cyclist_gaps(traj: pd.DataFrame, classes: dict) -> np.ndarray:
     is_ego = traj["is_ego"].to_numpy(bool)
     if not vru.any() or not is_ego.any():
         return np.zeros(0)
-    cols = ["step", "x", "y", "heading", "length", "width"] + (["z"] if "z" in traj else [])
+    lanes = bool(apart) and "lane" in traj
+    cols = ["step", "x", "y", "heading", "length", "width"] + (["z"] if "z" in traj else []) + (["lane"] if lanes else [])
     m = traj.loc[is_ego, cols].merge(traj.loc[vru & ~is_ego, cols], on="step", suffixes=("_e", "_v"))
     if "z" in traj:  # pairs on one level only (core.levels)
         m = m[same_level(m["z_e"].to_numpy(float), m["z_v"].to_numpy(float))]
+    if lanes:  # ... also by the net's topology (road.grade)
+        m = m[~apart_pairs(apart, m["lane_e"].fillna("").astype(str), m["lane_v"].fillna("").astype(str))]
     if m.empty:
         return np.zeros(0)
     ce = footprint_corners(m[["x_e", "y_e"]].to_numpy(), m["heading_e"].to_numpy(), m["length_e"].to_numpy(),

@@ -26,6 +26,7 @@ import sumolib
 from shapely.geometry import LineString, MultiPolygon, Polygon
 
 from sumo_avoid.road.elements import read_elements
+from sumo_avoid.road.grade import apart_parts
 from sumo_avoid.road.lane_index import LaneIndex
 from sumo_avoid.road.polyline import polyline_length, polyline_point_at, polyline_project
 from sumo_avoid.road.right_of_way import RightOfWay
@@ -325,6 +326,11 @@ class Road:
     def right_of_way(self) -> RightOfWay:
         """The junction logic (which links yield to which), built on first use."""
         return RightOfWay(self._net)
+
+    @functools.cached_property
+    def apart(self):
+        """Edge -> the edges whose lanes cross its own without a junction: two levels (:mod:`.grade`), built on first use."""
+        return apart_parts(self._net) if self._net is not None else {}
 
     # ------------------------------------------------------------------ lane lookup (metrics)
     @functools.cached_property

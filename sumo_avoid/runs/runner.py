@@ -120,6 +120,7 @@ class OpenRun:
         except SumoStartError as e:
             self._tmp.cleanup()
             raise load_error(scn, str(e), at_start=True) from None
+        self.sim.apart = scene.road.apart if spec.arena is None else {}  # two levels whatever the heights (road.grade)
         try:
             for note in scn.sumocfg.notes if scn.sumocfg else ():
                 self.sim.note(note)

@@ -52,7 +52,7 @@ import numpy as np
 
 from sumo_avoid.core.config import FieldError, field_doc
 from sumo_avoid.core.geometry import wrap_angle
-from sumo_avoid.core.levels import same_level
+from sumo_avoid.core.levels import apart_pairs, same_level
 from sumo_avoid.core.types import Detections
 from sumo_avoid.sensing import occlusion
 from sumo_avoid.sensing.tracker import Tracker
@@ -213,7 +213,9 @@ class Radar:
         e, n = self._candidates(spos, fwd, centre, radius, rows, p.max_range_m, math.cos(half), math.sin(half))
         if snap.levels:  # no return from, and no shadow of, a road user on another level (core.levels)
             vehicle = n < snap.n
-            keep = ~vehicle | same_level(snap.z[rows[e]], snap.z[np.where(vehicle, n, 0)])
+            m = np.where(vehicle, n, 0)
+            keep = ~vehicle | (same_level(snap.z[rows[e]], snap.z[m]) &
+                               ~apart_pairs(snap.apart, [snap.lane[r] for r in rows[e]], [snap.lane[r] for r in m]))
             e, n = e[keep], n[keep]
         ptr = np.concatenate([[0], np.cumsum(np.bincount(e, minlength=len(rows)))]).astype(np.int64)
         ego, tgt, rng, az, vr = self._scan(spos, hd, svel, polys, vel, ptr, n, half, p.max_range_m)

@@ -2,9 +2,8 @@
 
 :class:`SumoSim` starts SUMO for a scenario, reads the world once per step into an immutable
 :class:`~sumo_avoid.core.snapshot.Snapshot` (through subscriptions, not per-vehicle getters; positions
-in 3-D, the z for :mod:`sumo_avoid.core.levels`), applies
-the actuator's poses to the egos with ``moveToXY`` (on their route's lanes while they drive on
-them, :mod:`sumo_avoid.sumo.placement`) and advances the simulation.
+in 3-D, the z for :mod:`sumo_avoid.core.levels`), applies the actuator's poses to the egos with
+``moveToXY`` (on their route's lanes while they drive on them, :mod:`sumo_avoid.sumo.placement`) and advances it.
 
 SUMO runs with a fixed seed, ``--collision.check-junctions``, collisions reported but not acted on
 (``--collision.action warn``, ``--collision.mingap-factor 0`` = physical contact only), no
@@ -120,6 +119,7 @@ class SumoSim:
         if refused is not None:  # SUMO's own first error line says why (libsumo's may say only "Process Error")
             raise SumoStartError(start_error(first_error("".join(said)), " ".join(str(refused).split()))) from None
         self.step_s = libsumo.simulation.getDeltaT()
+        self.apart: dict = {}  # edges crossing without a junction (road.grade), given to every snapshot; set by the runner
         libsumo.simulation.subscribe(list(_SIM_VARS))
         self._dims: dict[str, tuple[float, float]] = {}  # id -> (length, width), static
         self._vclass: dict[str, str] = {}  # vehicle id -> SUMO vehicle class, static
@@ -203,7 +203,7 @@ class SumoSim:
             is_ego, person = np.concatenate([is_ego, np.zeros(len(p_ids), bool)]), np.r_[person, np.ones(len(p_ids), bool)]
             lane_pos = np.concatenate([lane_pos, p_lane_pos])
         return Snapshot(self.time_s, ids, centre, vel, heading, length, width, is_ego, signals=signals, lane=lane,
-                        lane_pos=lane_pos, vclass=vclass, is_person=person, z=z)
+                        lane_pos=lane_pos, vclass=vclass, is_person=person, z=z, apart=self.apart)
 
     def _read_persons(self):
         """The persons outside vehicles: ids, centres, velocities, headings, (length, width), lanes, lane

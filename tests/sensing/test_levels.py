@@ -103,13 +103,35 @@ def test_a_car_on_the_bridge_over_the_ego_is_no_obstacle_and_no_collision(runs):
 
 
 @pytest.mark.sumo
-def test_the_same_car_on_the_egos_level_still_counts(runs):
+def test_a_flat_net_keeps_two_levels_where_edges_cross_without_a_junction(runs):
+    # every z removed (an OSM import without --osm.layer-elevation, or one whose heights put the road under a
+    # bridge 0.66 m below it): the two edges still cross without a junction, so SUMO lets the cars pass through
+    # each other, and so do the sensors, the controller and the metrics (road.grade)
     res, m = runs["flat"]
-    row, _ = _at_crossing(res)
-    assert "z" not in res.traj  # a flat net's recording has no z column
-    assert _slowest_passing(res, row) < CRUISE_MPS - 1.0 and m["collisions"] > 0  # the controller saw it, too late
-    assert m["min_gap_m"] < 1.0 and m["min_ttc2d_s"] < 10.0
-    # the bridge run's recording without its heights: the crossing is a contact
-    bridge = runs["bridge"][0].traj
+    row, d = _at_crossing(res)
+    assert "z" not in res.traj and d < 1.0  # a flat net's recording has no z column; it passes right over the ego
+    assert res.road.apart == {"low": frozenset({"up"}), "up": frozenset({"low"})}
+    assert _slowest_passing(res, row) >= CRUISE_MPS - 1e-6 and m["collisions"] == 0 and m["min_gap_m"] > 50.0
+
+
+@pytest.mark.sumo
+def test_the_same_car_on_the_egos_level_still_counts(runs):
+    # the recordings without heights and without the net's crossings: the crossing is a contact
+    bridge, flat = runs["bridge"][0].traj, runs["flat"][0].traj
     assert len(basic.collision_events(bridge)) == 0
     assert len(basic.collision_events(bridge.drop(columns="z"))) == 1
+    assert len(basic.collision_events(flat)) == 1
+
+
+def test_edges_crossing_without_a_junction_by_hand():
+    from sumo_avoid.core.levels import apart_mask, apart_pairs, part_of
+    assert [part_of(x) for x in ("E_0", "-16652218_2", ":J_3_0", ":cluster_1_2_w0_0", ":J_c1_0", "")] == \
+        ["E", "-16652218", ":J", ":cluster_1_2", ":J", ""]
+    apart = {"low": frozenset({"up"}), "up": frozenset({"low"})}
+    assert apart_mask(apart, "low_0", ["up_1", "low_1", ":J_0_0", ""]).tolist() == [True, False, False, False]
+    assert apart_pairs(apart, ["low_0", "low_0", "up_0", "x_0"], ["up_0", "ramp_0", "low_1", "up_0"]).tolist() == \
+        [True, False, True, False]
+    # the snapshot's test: the car on "up" is on another level though all heights are 0; the one on "low" is not
+    snap = Snapshot(0.0, ("ego", "over", "behind"), [[0, 0], [0, 0.5], [-6, 0]], np.zeros((3, 2)), np.zeros(3),
+                    np.full(3, 4.5), np.full(3, 1.8), [True, False, False], lane=("low_0", "up_0", "low_0"), apart=apart)
+    assert snap.levels and snap.same_level(0).tolist() == [True, False, True]

@@ -8,7 +8,6 @@ import numpy as np
 
 from sumo_avoid.control.formation import field as ff
 from sumo_avoid.core.geometry import footprint_corners, pad_polygons
-from sumo_avoid.core.levels import same_level
 from sumo_avoid.core.types import Observation
 from sumo_avoid.sensing.perception import radar_obstacles
 
@@ -61,7 +60,7 @@ class ObstacleLists:
             if len(o):
                 k = np.hypot(*(snap.pos[o][None] - where[:, None]).transpose(2, 0, 1)) <= r
                 if snap.levels:  # on another level (a bridge over the member): no obstacle (core.levels)
-                    k &= same_level(snap.z[obs.ego_rows][:, None], snap.z[o][None])
+                    k &= np.array([snap.same_level(int(r), o) for r in obs.ego_rows]).reshape(k.shape)
                 o, k = o[k.any(axis=0)], k[:, k.any(axis=0)]
                 ahead = self.p.predict_s * snap.vel[o]  # each as the box it sweeps within predict_s
                 parts.append(footprint_corners(snap.pos[o] + 0.5 * ahead, snap.heading[o],
