@@ -26,7 +26,7 @@ import numpy as np
 from sumo_avoid.core.types import Keys
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.metrics.pairs import Rows
-from sumo_avoid.metrics.standard import pair_rows, recorded
+from sumo_avoid.metrics.standard import pair_rows, recorded, road_apart
 from sumo_avoid.rollout.result import RunResult
 
 CHUNK = 200_000  # pairs per vectorised batch (memory)
@@ -106,4 +106,4 @@ class MinTTC2D(Metric):
         if run.persons is None or run.persons.empty:
             return {"min_ttc2d_s": min_ttc2d_s(run.traj, pair_rows(run))}
         both = recorded(run).sort_values(["step", "id"], kind="stable").reset_index(drop=True)
-        return {"min_ttc2d_s": min_ttc2d_s(both, Rows.of(both))}
+        return {"min_ttc2d_s": min_ttc2d_s(both, Rows.of(both, road_apart(run)))}
