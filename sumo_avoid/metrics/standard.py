@@ -49,9 +49,8 @@ def pair_rows(run: RunResult) -> Rows:
 
 
 def road_apart(run: RunResult) -> dict:
-    """Edges crossing without a junction on the run's net (road.grade; none in an arena)."""
-    road = getattr(run, "road", None)
-    return road.apart if road is not None and getattr(road, "_net", None) is not None else {}
+    """Edges crossing without a junction on the run's net (road.grade; none in an arena, as in the run's snapshots)."""
+    return {} if run.scene.walls is not None else getattr(run.road, "apart", {})
 
 
 def ego_rows(run: RunResult) -> EgoRows:

@@ -101,6 +101,11 @@ def _blend_m(e) -> float:
     return min(0.5 * float(e.getLength()), 60.0)
 
 
+def _with_change(m: int, e, onward: tuple[int, float]) -> tuple[int, float]:
+    """(lane changes, steepness) of changing ``m`` lanes on edge ``e`` and then going on at cost ``onward``."""
+    return m + onward[0], round(m / _blend_m(e) + onward[1], 9)
+
+
 def lane_costs(edges, arrival_lane: int | None, vclass: str | None) -> list[dict[int, tuple[int, float]]]:
     """Per edge k, for each lane index the path may enter ``edges[k]`` by: (the lane changes the rest of the route
     needs from there, their steepness: the sum over them of lanes changed / the length of the edge's blend,
@@ -125,7 +130,7 @@ def lane_costs(edges, arrival_lane: int | None, vclass: str | None) -> list[dict
             j = c.getFromLane().getIndex()
             for ln in e.getLanes():
                 m = abs(ln.getIndex() - j)
-                cand = (m + to[0], round(m / _blend_m(e) + to[1], 9))
+                cand = _with_change(m, e, to)
                 here[ln.getIndex()] = min(here.get(ln.getIndex(), cand), cand)
         costs.insert(0, here)
     return costs
@@ -227,7 +232,7 @@ class RoutePlanner:
 
         def key(c):
             m, to = abs(c.getFromLane().getIndex() - ref), onward.get(c.getToLane().getIndex(), far)
-            return (m + to[0], round(m / _blend_m(e) + to[1], 9), m,
+            return (*_with_change(m, e, to), m,
                     round(_turning(c, self.right_of_way.via_chain(c)), 3), c.getFromLane().getIndex())
         conn = min(conns, key=key)
         return conn, int(np.clip(conn.getFromLane().getIndex(), 0, len(lanes) - 1))
