@@ -13,7 +13,10 @@ The *box* of a link is the ego's path from the link's stop line to where the rou
 the ego is held (the rules' braking curve to ``stop_margin_m`` before the stop line) while
 
 * a vehicle stands (slower than :data:`~sumo_avoid.safety.crossing_rule.QUEUE_MPS`) with its footprint
-  within :data:`BOX_MARGIN_M` of the strip the ego's footprint sweeps along the box, or
+  within :data:`BOX_MARGIN_M` of the strip the ego's footprint sweeps along the box, and of that strip
+  moved to either side as far as the lane's spare width lets the ego move over (:func:`lane_slack`; in
+  Wildau a car waiting inside the junction for the ego, at its own internal line, reached 0.08 m into the
+  centred strip of a 3.2 m lane: the ego waited for it, it for the ego, for the last 280 s), or
 * the exit has not the ego's length plus :data:`~sumo_avoid.safety.crossing_rule.ROOM_M` free
   (:func:`~sumo_avoid.safety.crossing_rule.room_beyond`: vehicles and people standing on the path
   there, or vehicles going its way that would stand there braking now).
@@ -49,8 +52,9 @@ def junction_exits(task) -> tuple[float, ...]:
     return tuple(out)
 
 
-def strip(path: np.ndarray, s_from: float, s_to: float, width_m: float) -> np.ndarray:
-    """(K, 4, 2) boxes of ``width_m`` and :data:`BOX_STEP_M` length tiling the path from s_from to s_to."""
+def strip(path: np.ndarray, s_from: float, s_to: float, width_m: float, offset_m: float = 0.0) -> np.ndarray:
+    """(K, 4, 2) boxes of ``width_m`` and :data:`BOX_STEP_M` length tiling the path from s_from to s_to,
+    their centres ``offset_m`` to the left of it (negative: to the right)."""
     cum = arc_lengths(path)
     s = np.arange(s_from + 0.5 * BOX_STEP_M, s_to, BOX_STEP_M)
     if len(s) == 0:
@@ -59,23 +63,39 @@ def strip(path: np.ndarray, s_from: float, s_to: float, width_m: float) -> np.nd
     ahead = np.column_stack([np.interp(s + 0.5, cum, path[:, 0]), np.interp(s + 0.5, cum, path[:, 1])])
     back = np.column_stack([np.interp(s - 0.5, cum, path[:, 0]), np.interp(s - 0.5, cum, path[:, 1])])
     heading = np.arctan2(ahead[:, 1] - back[:, 1], ahead[:, 0] - back[:, 0])
+    if offset_m:
+        xy = xy + offset_m * np.column_stack([-np.sin(heading), np.cos(heading)])
     return footprint_corners(xy, heading, BOX_STEP_M + 0.05, width_m)
 
 
-def stands_in_box(path: np.ndarray, s_from: float, s_to: float, snap, ego_row: int, width_m: float) -> bool:
+def stands_in_box(path: np.ndarray, s_from: float, s_to: float, snap, ego_row: int, width_m: float,
+                  shift_m: float = 0.0) -> bool:
     """Does a vehicle (not a person, not the ego) stand with its footprint within :data:`BOX_MARGIN_M`
-    of the strip of ``width_m`` the ego sweeps along the path from s_from to s_to?"""
+    of the strip of ``width_m`` the ego sweeps along the path from s_from to s_to, and of the same strip
+    moved ``shift_m`` to either side (as far as the ego can keep off it within its lane: a car waiting at
+    its own line with a corner in the lane's middle leaves room to pass it)?"""
     rows = np.flatnonzero(~snap.is_person & (snap.speed < QUEUE_MPS) & (np.arange(snap.n) != ego_row))
     if len(rows) == 0 or s_to <= s_from:
         return False
-    boxes = strip(path, s_from, s_to, width_m + 2.0 * BOX_MARGIN_M)
-    centres = boxes.mean(axis=1)
-    reach = 0.5 * float(np.hypot(snap.length[rows], snap.width[rows]).max()) + width_m + BOX_STEP_M
-    rows = rows[near_any(snap.pos[rows], centres, reach)]
-    if len(rows) == 0:
-        return False
-    theirs = footprint_corners(snap.pos[rows], snap.heading[rows], snap.length[rows], snap.width[rows])
-    return bool((pairwise_footprint_distance(boxes, theirs) <= 0.0).any())
+    theirs = None
+    for offset in ((0.0, shift_m, -shift_m) if shift_m > 0.0 else (0.0,)):
+        boxes = strip(path, s_from, s_to, width_m + 2.0 * BOX_MARGIN_M, offset)
+        if theirs is None:
+            reach = 0.5 * float(np.hypot(snap.length[rows], snap.width[rows]).max()) + width_m + BOX_STEP_M + shift_m
+            rows = rows[near_any(snap.pos[rows], boxes.mean(axis=1), reach)]
+            if len(rows) == 0:
+                return False
+            theirs = footprint_corners(snap.pos[rows], snap.heading[rows], snap.length[rows], snap.width[rows])
+        if not (pairwise_footprint_distance(boxes, theirs) <= 0.0).any():
+            return False
+    return True
+
+
+def lane_slack(task, s_from: float, s_to: float, width_m: float) -> float:
+    """How far the ego (``width_m`` wide) can move off its path to either side and stay within its lane
+    along s_from..s_to: half the narrowest lane's width less its own, m (0 without lane pieces)."""
+    widths = [p.widths_m[p.lane] for p in task.lanes if p.s_end_m > s_from and p.s_start_m < s_to and p.lane < len(p.widths_m)]
+    return max(0.5 * (min(widths) - width_m), 0.0) if widths else 0.0
 
 
 def box_cap(task, exits, s_front: float, v: float, v_cmd: float, snap, ego_row: int, length_m: float,
@@ -94,7 +114,8 @@ def box_cap(task, exits, s_front: float, v: float, v_cmd: float, snap, ego_row: 
         if cap > max(v, v_cmd, 0.5):
             return math.inf, -1.0
         need = length_m + ROOM_M
-        if (stands_in_box(task.path, link.s_stop_m, s_exit, snap, ego_row, width_m)
+        if (stands_in_box(task.path, link.s_stop_m, s_exit, snap, ego_row, width_m,
+                          lane_slack(task, link.s_stop_m, s_exit, width_m))
                 or not room_beyond(SimpleNamespace(s_exit_m=s_exit), task.path, snap, ego_row, need)):
             return cap, link.s_stop_m
         return math.inf, -1.0

@@ -50,6 +50,27 @@ def test_who_stands_in_the_box(vehicle, inside):
     assert junction_box.stands_in_box(PATH, 40.0, 60.0, _snap([vehicle]), 0, 1.8) is inside
 
 
+@pytest.mark.parametrize("vehicles, shift, inside", [
+    ([(50.0, 2.0, 0.0, 0.0, False)], 0.7, False),  # its side at y 1.1: the strip moved 0.7 m right ends at y 0.4
+    ([(50.0, 1.5, 0.0, 0.0, False)], 0.7, False),  # its side at y 0.6: still clear of [-1.8, 0.4]
+    ([(50.0, 1.2, 0.0, 0.0, False)], 0.7, True),  # its side at y 0.3: in the moved strip too
+    ([(50.0, 0.5, 0.0, 0.0, False)], 0.7, True),  # across the middle: in every strip
+    ([(50.0, 2.0, 0.0, 0.0, False), (50.0, -2.0, 0.0, 0.0, False)], 0.7, True),  # one on each side: no way past
+    ([(50.0, 2.0, 0.0, 0.0, False)], 0.0, True),  # no room in the lane to move over
+])
+def test_room_to_pass_within_the_lane(vehicles, shift, inside):
+    assert junction_box.stands_in_box(PATH, 40.0, 60.0, _snap(vehicles), 0, 1.8, shift) is inside
+
+
+def test_lane_slack_is_half_the_narrowest_lanes_spare_width():
+    piece = lambda a, b, w: SimpleNamespace(s_start_m=a, s_end_m=b, lane=1, widths_m=(1.0, w))
+    task = SimpleNamespace(lanes=(piece(0.0, 40.0, 2.0), piece(40.0, 50.0, 3.2), piece(50.0, 60.0, 3.0), piece(60.0, 90.0, 2.0)))
+    assert junction_box.lane_slack(task, 40.0, 60.0, 1.8) == pytest.approx(0.6)  # (3.0 - 1.8) / 2; the 2.0 m lanes are outside
+    assert junction_box.lane_slack(task, 0.0, 60.0, 1.8) == pytest.approx(0.1)
+    assert junction_box.lane_slack(task, 0.0, 40.0, 2.2) == 0.0  # a lane narrower than the ego: none
+    assert junction_box.lane_slack(SimpleNamespace(lanes=()), 0.0, 40.0, 1.8) == 0.0
+
+
 @pytest.fixture(scope="module")
 def crossroads(tmp_path_factory):
     d = tmp_path_factory.mktemp("box")
