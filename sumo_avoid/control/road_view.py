@@ -243,7 +243,10 @@ class RoadView:
         waits = block & (o_vs < YIELDING_MPS) & (ds + 0.5 * (sc.length + sc.o_length) < 0.0)
         held = self._held_free_s is not None
         if block.any():
-            if (step * (sc.d - centres[own]) > COMMIT_M and not (alongside & ~waits).any()
+            toward = 1.0 if centres[nxt] > centres[own] else -1.0  # across the road (lane indices grow to the left
+            # with right-hand traffic, to the right with left-hand: Chiang Mai car56 stood half across, the change
+            # under way counted as none, clipped by a car coming up the next lane)
+            if (toward * (sc.d - centres[own]) > COMMIT_M and not (alongside & ~waits).any()
                     and (not held or waits[block].all())):
                 return 0.0, np.inf  # under way: carry it through
             self._held_free_s = 0.0

@@ -48,25 +48,38 @@ def test_the_ego_lets_the_faster_car_pass_and_changes_lanes_behind_it(lane_chang
     assert m["collisions"] == 0 and m["sumo_collisions"] == 0
 
 
+@pytest.fixture(scope="module")
+def lane_change_lefthand(tmp_path_factory):
+    d = tmp_path_factory.mktemp("lane_change_lefthand")
+    netconvert("lane_change", d, "l", "--lefthand")
+    return d
+
+
+@pytest.mark.parametrize("lefthand", [False, True], ids=["righthand", "lefthand"])
 @pytest.mark.parametrize("car_speed_mps, goes", [(0.0, True), (5.0, False)])
-def test_a_change_under_way_goes_on_past_a_car_standing_behind_that_waits_for_it(lane_change, car_speed_mps, goes):
+def test_a_change_under_way_goes_on_past_a_car_standing_behind_that_waits_for_it(lane_change, lane_change_lefthand,
+                                                                                  car_speed_mps, goes, lefthand):
     # the ego (standing, 4.5 m) 1.2 m across towards the lane that leads on (its centre at d 0, the ego's lane at
     # -3.2), a car in that lane 2 m behind it (bumper to bumper, inside the 3 m gap): standing, it waits for the
     # ego, which carries its change through (berlin_bike_tram, truth, seed 1: the ego held the change for good
-    # while the car it had stopped waited for it); coming up at 5 m/s it still holds the ego
+    # while the car it had stopped waited for it); coming up at 5 m/s it still holds the ego. With left-hand
+    # traffic the lanes are mirrored (the ego's lane at d +3.2, 1.2 m across is d +2.0): the change under way is
+    # the same (unseen Chiang Mai: counted as none, the ego stood half across and was clipped)
     import numpy as np
 
     from sumo_avoid.control.road_view import FrenetScene, RoadView
     from sumo_avoid.core.types import EgoTask
     from sumo_avoid.road.network import Road
 
-    plan = Road.from_net_file(lane_change / "l.net.xml").route(["AB", "BC"], depart_lane=0, vclass="passenger")
+    side = -1.0 if lefthand else 1.0
+    plan = Road.from_net_file((lane_change_lefthand if lefthand else lane_change) / "l.net.xml").route(
+        ["AB", "BC"], depart_lane=0, vclass="passenger")
     view = RoadView(EgoTask("ego", plan.path[-1], plan.path, 10.0, plan.links, plan.speed_limits, plan.lanes), 4.25)
     s = 200.0
-    sc = FrenetScene(s, -2.0, 0.0, np.zeros(2), 4.5, 1.8, np.array([[s - 4.5 - 2.0, 0.0]]), np.zeros(1),
+    sc = FrenetScene(s, -2.0 * side, 0.0, np.zeros(2), 4.5, 1.8, np.array([[s - 4.5 - 2.0, 0.0]]), np.zeros(1),
                      np.array([4.5]), np.array([1.8]), np.array([[car_speed_mps, 0.0]]),
                      lambda q: (np.full(len(q), -4.8), np.full(len(q), 1.6)))
     offset, v = view.lane_change(sc, 15.0, 4.0, 0.1)
     assert (offset == 0.0 and v == np.inf) == goes
     if not goes:
-        assert offset == pytest.approx(-3.2)  # it keeps to its lane's centre
+        assert offset == pytest.approx(-3.2 * side)  # it keeps to its lane's centre
