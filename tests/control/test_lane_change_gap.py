@@ -83,3 +83,27 @@ def test_a_change_under_way_goes_on_past_a_car_standing_behind_that_waits_for_it
     assert (offset == 0.0 and v == np.inf) == goes
     if not goes:
         assert offset == pytest.approx(-3.2 * side)  # it keeps to its lane's centre
+
+
+@pytest.mark.parametrize("ego_speed_mps, car_speed_mps, goes", [(0.0, 0.0, True), (0.0, 5.0, False), (5.0, 0.0, False)])
+def test_a_standing_ego_starts_its_change_ahead_of_a_car_standing_behind_in_that_lane(lane_change, ego_speed_mps,
+                                                                                       car_speed_mps, goes):
+    # the ego in the middle of its lane (d -3.2, no change under way), a car in the lane that leads on 2 m behind it
+    # (bumper to bumper): when both stand, that car waits for the ego (SUMO's drivers stop to let a car that must
+    # change lanes in; unseen Bengaluru: each waited for the other for 121 s and more), so the ego goes; a car
+    # coming up, or an ego still rolling, keeps the change held
+    import numpy as np
+
+    from sumo_avoid.control.road_view import FrenetScene, RoadView
+    from sumo_avoid.core.types import EgoTask
+    from sumo_avoid.road.network import Road
+
+    plan = Road.from_net_file(lane_change / "l.net.xml").route(["AB", "BC"], depart_lane=0, vclass="passenger")
+    view = RoadView(EgoTask("ego", plan.path[-1], plan.path, 10.0, plan.links, plan.speed_limits, plan.lanes), 4.25)
+    s = 200.0
+    sc = FrenetScene(s, -3.2, 0.0, np.array([ego_speed_mps, 0.0]), 4.5, 1.8, np.array([[s - 4.5 - 2.0, 0.0]]),
+                     np.zeros(1), np.array([4.5]), np.array([1.8]), np.array([[car_speed_mps, 0.0]]),
+                     lambda q: (np.full(len(q), -4.8), np.full(len(q), 1.6)))
+    offset, v = view.lane_change(sc, 15.0, 4.0, 0.1)
+    assert (offset == 0.0 and v == np.inf) == goes
+
