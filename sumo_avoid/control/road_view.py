@@ -242,18 +242,19 @@ class RoadView:
         # ego half across, the car behind stopped 2.5 m back, each waited for the other to the end)
         waits = block & (o_vs < YIELDING_MPS) & (ds + 0.5 * (sc.length + sc.o_length) < 0.0)
         held = self._held_free_s is not None
-        if block.any() and waits[block].all() and abs(float(sc.vel[0])) < YIELDING_MPS:
-            # the ego stands, and all that is in the way stands wholly behind it in that lane: SUMO's drivers stop
-            # there to let a car that must change lanes in (its lane-change model asks them to), so waiting for
-            # them waits for ever (unseen Bengaluru car22: 121 s and on, the queue behind in both lanes)
-            self._held_free_s = None
-            return 0.0, np.inf
         if block.any():
+            all_wait = bool(waits[block].all())
+            if all_wait and abs(float(sc.vel[0])) < YIELDING_MPS:
+                # the ego stands, and all that is in the way stands wholly behind it in that lane: SUMO's drivers stop
+                # there to let a car that must change lanes in (its lane-change model asks them to), so waiting for
+                # them waits for ever (unseen Bengaluru car22: 121 s and on, the queue behind in both lanes)
+                self._held_free_s = None
+                return 0.0, np.inf
             toward = 1.0 if centres[nxt] > centres[own] else -1.0  # across the road (lane indices grow to the left
             # with right-hand traffic, to the right with left-hand: Chiang Mai car56 stood half across, the change
             # under way counted as none, clipped by a car coming up the next lane)
             if (toward * (sc.d - centres[own]) > COMMIT_M and not (alongside & ~waits).any()
-                    and (not held or waits[block].all())):
+                    and (not held or all_wait)):
                 return 0.0, np.inf  # under way: carry it through
             self._held_free_s = 0.0
         elif not held:

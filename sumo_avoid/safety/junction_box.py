@@ -52,9 +52,8 @@ def junction_exits(task) -> tuple[float, ...]:
     return tuple(out)
 
 
-def strip(path: np.ndarray, s_from: float, s_to: float, width_m: float, offset_m: float = 0.0) -> np.ndarray:
-    """(K, 4, 2) boxes of ``width_m`` and :data:`BOX_STEP_M` length tiling the path from s_from to s_to,
-    their centres ``offset_m`` to the left of it (negative: to the right)."""
+def _tiles(path: np.ndarray, s_from: float, s_to: float) -> tuple[np.ndarray, np.ndarray]:
+    """Centres (K, 2) and headings (K,) of :data:`BOX_STEP_M` tiles along the path from s_from to s_to."""
     cum = arc_lengths(path)
     s = np.arange(s_from + 0.5 * BOX_STEP_M, s_to, BOX_STEP_M)
     if len(s) == 0:
@@ -62,10 +61,19 @@ def strip(path: np.ndarray, s_from: float, s_to: float, width_m: float, offset_m
     xy = np.column_stack([np.interp(s, cum, path[:, 0]), np.interp(s, cum, path[:, 1])])
     ahead = np.column_stack([np.interp(s + 0.5, cum, path[:, 0]), np.interp(s + 0.5, cum, path[:, 1])])
     back = np.column_stack([np.interp(s - 0.5, cum, path[:, 0]), np.interp(s - 0.5, cum, path[:, 1])])
-    heading = np.arctan2(ahead[:, 1] - back[:, 1], ahead[:, 0] - back[:, 0])
+    return xy, np.arctan2(ahead[:, 1] - back[:, 1], ahead[:, 0] - back[:, 0])
+
+
+def _boxes(xy: np.ndarray, heading: np.ndarray, width_m: float, offset_m: float = 0.0) -> np.ndarray:
     if offset_m:
         xy = xy + offset_m * np.column_stack([-np.sin(heading), np.cos(heading)])
     return footprint_corners(xy, heading, BOX_STEP_M + 0.05, width_m)
+
+
+def strip(path: np.ndarray, s_from: float, s_to: float, width_m: float, offset_m: float = 0.0) -> np.ndarray:
+    """(K, 4, 2) boxes of ``width_m`` and :data:`BOX_STEP_M` length tiling the path from s_from to s_to,
+    their centres ``offset_m`` to the left of it (negative: to the right)."""
+    return _boxes(*_tiles(path, s_from, s_to), width_m, offset_m)
 
 
 def stands_in_box(path: np.ndarray, s_from: float, s_to: float, snap, ego_row: int, width_m: float,
@@ -77,18 +85,14 @@ def stands_in_box(path: np.ndarray, s_from: float, s_to: float, snap, ego_row: i
     rows = np.flatnonzero(~snap.is_person & (snap.speed < QUEUE_MPS) & (np.arange(snap.n) != ego_row))
     if len(rows) == 0 or s_to <= s_from:
         return False
-    theirs = None
-    for offset in ((0.0, shift_m, -shift_m) if shift_m > 0.0 else (0.0,)):
-        boxes = strip(path, s_from, s_to, width_m + 2.0 * BOX_MARGIN_M, offset)
-        if theirs is None:
-            reach = 0.5 * float(np.hypot(snap.length[rows], snap.width[rows]).max()) + width_m + BOX_STEP_M + shift_m
-            rows = rows[near_any(snap.pos[rows], boxes.mean(axis=1), reach)]
-            if len(rows) == 0:
-                return False
-            theirs = footprint_corners(snap.pos[rows], snap.heading[rows], snap.length[rows], snap.width[rows])
-        if not (pairwise_footprint_distance(boxes, theirs) <= 0.0).any():
-            return False
-    return True
+    xy, heading = _tiles(path, s_from, s_to)
+    reach = 0.5 * float(np.hypot(snap.length[rows], snap.width[rows]).max()) + width_m + BOX_STEP_M + shift_m
+    rows = rows[near_any(snap.pos[rows], xy, reach)]
+    if len(rows) == 0:
+        return False
+    theirs = footprint_corners(snap.pos[rows], snap.heading[rows], snap.length[rows], snap.width[rows])
+    return all((pairwise_footprint_distance(_boxes(xy, heading, width_m + 2.0 * BOX_MARGIN_M, offset), theirs) <= 0.0).any()
+               for offset in ((0.0, shift_m, -shift_m) if shift_m > 0.0 else (0.0,)))
 
 
 def lane_slack(task, s_from: float, s_to: float, width_m: float) -> float:

@@ -48,6 +48,24 @@ def test_the_ego_lets_the_faster_car_pass_and_changes_lanes_behind_it(lane_chang
     assert m["collisions"] == 0 and m["sumo_collisions"] == 0
 
 
+def _view_and_scene(net_dir, d_m: float, ego_speed_mps: float, car_speed_mps: float):
+    """The ego's road view on the netconvert road of ``net_dir``, standing or rolling at s 200 m, d ``d_m``, a car
+    in the lane that leads on 2 m behind it (bumper to bumper)."""
+    import numpy as np
+
+    from sumo_avoid.control.road_view import FrenetScene, RoadView
+    from sumo_avoid.core.types import EgoTask
+    from sumo_avoid.road.network import Road
+
+    plan = Road.from_net_file(net_dir / "l.net.xml").route(["AB", "BC"], depart_lane=0, vclass="passenger")
+    view = RoadView(EgoTask("ego", plan.path[-1], plan.path, 10.0, plan.links, plan.speed_limits, plan.lanes), 4.25)
+    s = 200.0
+    sc = FrenetScene(s, d_m, 0.0, np.array([ego_speed_mps, 0.0]), 4.5, 1.8, np.array([[s - 4.5 - 2.0, 0.0]]),
+                     np.zeros(1), np.array([4.5]), np.array([1.8]), np.array([[car_speed_mps, 0.0]]),
+                     lambda q: (np.full(len(q), -4.8), np.full(len(q), 1.6)))
+    return view, sc
+
+
 @pytest.fixture(scope="module")
 def lane_change_lefthand(tmp_path_factory):
     d = tmp_path_factory.mktemp("lane_change_lefthand")
@@ -67,18 +85,8 @@ def test_a_change_under_way_goes_on_past_a_car_standing_behind_that_waits_for_it
     # the same (unseen Chiang Mai: counted as none, the ego stood half across and was clipped)
     import numpy as np
 
-    from sumo_avoid.control.road_view import FrenetScene, RoadView
-    from sumo_avoid.core.types import EgoTask
-    from sumo_avoid.road.network import Road
-
     side = -1.0 if lefthand else 1.0
-    plan = Road.from_net_file((lane_change_lefthand if lefthand else lane_change) / "l.net.xml").route(
-        ["AB", "BC"], depart_lane=0, vclass="passenger")
-    view = RoadView(EgoTask("ego", plan.path[-1], plan.path, 10.0, plan.links, plan.speed_limits, plan.lanes), 4.25)
-    s = 200.0
-    sc = FrenetScene(s, -2.0 * side, 0.0, np.zeros(2), 4.5, 1.8, np.array([[s - 4.5 - 2.0, 0.0]]), np.zeros(1),
-                     np.array([4.5]), np.array([1.8]), np.array([[car_speed_mps, 0.0]]),
-                     lambda q: (np.full(len(q), -4.8), np.full(len(q), 1.6)))
+    view, sc = _view_and_scene(lane_change_lefthand if lefthand else lane_change, -2.0 * side, 0.0, car_speed_mps)
     offset, v = view.lane_change(sc, 15.0, 4.0, 0.1)
     assert (offset == 0.0 and v == np.inf) == goes
     if not goes:
@@ -94,16 +102,7 @@ def test_a_standing_ego_starts_its_change_ahead_of_a_car_standing_behind_in_that
     # coming up, or an ego still rolling, keeps the change held
     import numpy as np
 
-    from sumo_avoid.control.road_view import FrenetScene, RoadView
-    from sumo_avoid.core.types import EgoTask
-    from sumo_avoid.road.network import Road
-
-    plan = Road.from_net_file(lane_change / "l.net.xml").route(["AB", "BC"], depart_lane=0, vclass="passenger")
-    view = RoadView(EgoTask("ego", plan.path[-1], plan.path, 10.0, plan.links, plan.speed_limits, plan.lanes), 4.25)
-    s = 200.0
-    sc = FrenetScene(s, -3.2, 0.0, np.array([ego_speed_mps, 0.0]), 4.5, 1.8, np.array([[s - 4.5 - 2.0, 0.0]]),
-                     np.zeros(1), np.array([4.5]), np.array([1.8]), np.array([[car_speed_mps, 0.0]]),
-                     lambda q: (np.full(len(q), -4.8), np.full(len(q), 1.6)))
+    view, sc = _view_and_scene(lane_change, -3.2, ego_speed_mps, car_speed_mps)
     offset, v = view.lane_change(sc, 15.0, 4.0, 0.1)
     assert (offset == 0.0 and v == np.inf) == goes
 
