@@ -50,6 +50,7 @@ class Detections:
     mount: str = "front"  # which radar: "front" (boresight = heading), "rear" (heading + pi), "left" / "right" (heading + / - pi/2)
     vru: np.ndarray | None = None  # (D,) bool: the return is labelled a person or cyclist (small cross-section); None = none are
     walkway: np.ndarray | None = None  # (D,) bool: the return lies on a sidewalk or walking area of the map; None = none does
+    lane_heading: np.ndarray | None = None  # (D,) rad: direction of the map's lane the return lies in, NaN none; None = not placed
 
     @property
     def n(self) -> int:

@@ -338,6 +338,15 @@ class Road:
         """The normal lanes and junctions for point queries (:class:`LaneIndex`), built on first use."""
         return LaneIndex(self._net)
 
+    def lane_heading(self, points) -> np.ndarray:
+        """(M,2) points -> (M,) rad: the direction of the normal lane each point lies in (of several, the one
+        whose centre line is nearest), NaN where none (inside a junction, where internal lanes of every
+        direction overlap; on a crossing or walking area; off the lanes). A radar return placed on the map
+        this way tells which way the road user it belongs to is bound to move
+        (:mod:`sumo_avoid.sensing.perception`), as an ADAS fuses its radar with its map."""
+        _, direction = self.lanes.lane_at(points)
+        return np.arctan2(direction[:, 1], direction[:, 0]) if len(direction) else np.zeros(0)
+
 
 @functools.lru_cache(maxsize=16)
 def _load_cached(path: str, mtime_ns: int) -> Road:

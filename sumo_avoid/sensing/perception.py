@@ -56,14 +56,14 @@ def velocity_estimate(det, k=None, along=None) -> np.ndarray:
 def perceived_boxes(det, k=None, along=None, length_m: float = ASSUMED_LENGTH_M, width_m: float = ASSUMED_WIDTH_M):
     """Returns ``k`` (all by default) as assumed boxes: (pos (M,2), heading (M,), length (M,),
     width (M,), vel (M,2)); ``det.ego[k]`` says whose. Boxes and motion are aligned with ``along``
-    (rad, the traffic's direction) if given, else with the sensor's boresight."""
+    (rad, the traffic's direction; a scalar or one per return) if given, else with the sensor's boresight."""
     k = np.arange(det.n) if k is None else np.asarray(k, int)
     M = len(k)
     if M == 0:
         z = np.zeros(0)
         return np.zeros((0, 2)), z, z, z, np.zeros((0, 2))
     e = det.ego[k]
-    h = det.sensor_heading[e] if along is None else np.full(M, float(along))  # box axis
+    h = det.sensor_heading[e] if along is None else np.broadcast_to(np.asarray(along, float), (M,)).copy()  # box axis
     a = det.sensor_heading[e] + det.azimuth_rad[k]  # line of sight, world frame
     u = np.column_stack([np.cos(a), np.sin(a)])
     hd = np.column_stack([np.cos(h), np.sin(h)])
@@ -133,12 +133,26 @@ def towards_path(share, closing_mps) -> np.ndarray:
     return np.where(kerb & (np.asarray(closing_mps, float) <= KERB_STAND_MPS), 0.0, share)
 
 
+def _lane_along(det, k, small, along):
+    """Per return ``k`` of a car-sized road user: the direction of the map's lane it lies in (internal lanes
+    included), else ``along`` (the traffic's direction at the ego; the boresight if None). Inside a turn the
+    traffic's direction at the ego is no one else's: a car crossing in front of an ego turning right at
+    Bologna's junction 50 became a box across the ego's strip, and the ego stood in the turn with its nose in
+    the crossing cars' path (bologna_pepoli, radar, seed 2: 8 contacts). A labelled person or cyclist keeps
+    ``along`` (its box is small; a person's way across the road is no lane's)."""
+    lane = None if det.lane_heading is None else det.lane_heading[k]
+    if lane is None or not len(k):
+        return along
+    base = det.sensor_heading[det.ego[k]] if along is None else np.full(len(k), float(along))
+    return np.where(np.isfinite(lane) & ~small, lane, base)
+
+
 def _obstacles_of(det, vid: str, along):
     """One scan's returns of ego ``vid`` as boxes (a car's; a labelled person's or cyclist's
     :data:`VRU_LENGTH_M` x :data:`VRU_WIDTH_M`), their VRU marks (not on a walkway) and walkway marks."""
     k = det.of(vid)
-    pos, hd, ln, wd, vel = perceived_boxes(det, k, along)
     small = det.vru_mask()[k]
+    pos, hd, ln, wd, vel = perceived_boxes(det, k, _lane_along(det, k, small, along))
     kerb = det.walkway_mask()[k]
     if small.any():
         j = np.flatnonzero(small)

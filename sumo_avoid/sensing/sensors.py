@@ -8,9 +8,10 @@ Each is built as ``cls(params, ctx, *, needs_scans, v2v)`` (:class:`sumo_avoid.c
   controllers get the scans plus the tracker's memory of returns out of view (one fused memory for
   all mounts), and the
   traffic's direction at each ego (its route path's nearest segment), along which returns are
-  taken to move (:mod:`.perception`); a return labelled a person or cyclist is placed on the map
-  (``Detections.walkway``: on a sidewalk or walking area, or where people wait at a crossing's end:
-  ``Road.at_kerb``), as an ADAS fuses its radar with its map.
+  taken to move unless the map says otherwise (:mod:`.perception`): every return is placed on the map,
+  in the normal lane it lies in (``Detections.lane_heading``: ``Road.lane_heading``; none inside a junction),
+  and a return labelled a person or cyclist on a sidewalk or walking area, or where people wait at a
+  crossing's end (``Detections.walkway``: ``Road.at_kerb``), as an ADAS fuses its radar with its map.
 
 Both hand flock members' V2V messages on (:mod:`.v2v`) when the controller needs them.
 """
@@ -97,6 +98,7 @@ class RadarSensor(_Base):
             self._seg_key, self._segs = ids, route_segments([self._paths.get(v) for v in ids])
         along = route_directions(None, snap.pos[rows], snap.heading[rows], self._segs)
         seen = self.front.objects(scans, along)  # one fused memory over the mounts; a tuple, like scans
-        if self.road is not None and any(d.vru is not None for d in seen):  # labelled returns placed on the map
-            seen = tuple(d if d.vru is None else replace(d, walkway=self.road.at_kerb(d.points())) for d in seen)
+        if self.road is not None:  # the returns placed on the map: the lane each lies in, labelled ones at the kerb or not
+            seen = tuple(replace(d, lane_heading=self.road.lane_heading(d.points()),
+                                 walkway=None if d.vru is None else self.road.at_kerb(d.points())) for d in seen)
         return Observation(snap, ids, rows, ego_speed, self.obstacles, scans, seen, along, self.v2v)

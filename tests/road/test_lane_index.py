@@ -23,3 +23,13 @@ def test_lane_and_direction_on_the_left_turn_crossroads():
     # on the border of two lanes the nearer centre line decides: 0.1 m into C2S_1 from the median
     lane, _ = lanes.lane_at([[-0.1, -100.0], [0.1, -100.0]])
     assert [lanes.ids[k] for k in lane] == ["C2S_1", "S2C_1"]
+
+
+def test_lane_heading_places_points_in_normal_lanes_only():
+    road = Road.from_net_file(ROOT / "nets" / "left_turn.net.xml")
+    # S2C northbound, C2S southbound, W2C eastbound; inside the junction (internal lanes of every direction
+    # overlap there) and in the field: none
+    h = road.lane_heading(np.array([[1.75, -100.0], [-1.75, -100.0], [-100.0, -5.25], [0.0, 0.0], [30.0, -100.0]]))
+    np.testing.assert_allclose(h[:3], [np.pi / 2, -np.pi / 2, 0.0], atol=1e-9)
+    assert np.isnan(h[3:]).all()
+    assert road.lane_heading(np.zeros((0, 2))).shape == (0,)

@@ -63,3 +63,29 @@ def test_a_person_at_the_kerb_far_off_the_traffic_direction_is_taken_to_stand():
     *_, vel, share, _ = obstacle_vehicles(obs, 0, np.zeros(2), 50.0)
     assert vel[0].tolist() == [0.0, 0.0] and share[0] == 0.0  # taken to stand at the kerb: its size
     assert vel[1] == pytest.approx([-1.2, 0.0]) and share[1] == 0.5  # walking, read along the road
+
+
+def test_a_car_return_in_a_lane_of_the_map_is_a_box_along_that_lane():
+    from sumo_avoid.core.types import Detections
+
+    # the ego's radar at the origin looking along +x at 10 m/s (the traffic's direction at the ego: 0 rad); three
+    # returns 10 m off at 45 degrees, closing at 5 m/s: a car in a lane running north (the map: pi/2), one where the
+    # map has no lane (inside a junction: NaN), a labelled cyclist in that northbound lane
+    a = np.radians([45.0, 45.0, 45.0])
+    det = Detections(0.0, ("ego",), np.zeros((1, 2)), np.zeros(1), np.array([[10.0, 0.0]]), np.zeros(3, int),
+                     np.full(3, 10.0), a, np.full(3, -5.0), vru=np.array([False, False, True]),
+                     walkway=np.zeros(3, bool), lane_heading=np.array([np.pi / 2, np.nan, np.pi / 2]))
+    obs = SimpleNamespace(snapshot=SimpleNamespace(ids=("ego",)), detections=(det,), route_heading=np.array([0.0]),
+                          index=lambda v: 0)
+    pos, heading, length, width, vel, *_ = obstacle_vehicles(obs, 0, np.zeros(2), 50.0)
+    r = 10.0 / np.sqrt(2.0)  # the return at (r, r)
+    # along the lane (north): the return on the box's rear face, to its left (b = -r across the axis): the centre
+    # half a length north and half a width east of it; moving north at the speed that explains -5 m/s:
+    # (-5 + 10 cos 45) / cos 45 = 2.929 m/s
+    assert heading[0] == pytest.approx(np.pi / 2)
+    assert pos[0] == pytest.approx([r + 0.9, r + 2.25])
+    assert vel[0] == pytest.approx([0.0, (-5.0 + 10.0 * np.cos(a[0])) / np.cos(a[0])], abs=1e-12)
+    # no lane there: along the traffic's direction at the ego, the return on the box's left rear corner
+    assert heading[1] == 0.0 and pos[1] == pytest.approx([r + 2.25, r + 0.9])
+    # a cyclist's small box keeps the traffic's direction at the ego (a person's way is no lane's)
+    assert heading[2] == 0.0 and length[2] == pytest.approx(1.8) and width[2] == pytest.approx(0.8)
