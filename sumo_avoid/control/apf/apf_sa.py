@@ -26,7 +26,7 @@ import numpy as np
 
 from sumo_avoid.control.apf.anneal import anneal
 from sumo_avoid.control.apf.apf import ApfDriver, ApfParams
-from sumo_avoid.control.apf.oncoming_pass import ABORT_D_M, PASS_CARROT_MIN_M, RADAR_SIGHT_M, OncomingPass, PassParams
+from sumo_avoid.control.apf.oncoming_pass import ABORT_D_M, PASS_CARROT_MIN_M, OncomingPass, PassParams
 from sumo_avoid.control.apf.queue import STAND_MPS, lane_runs_past, waits_in_queue
 from sumo_avoid.control.base_controller import BaseController
 from sumo_avoid.control.road_view import FrenetScene, RoadView
@@ -34,6 +34,7 @@ from sumo_avoid.core.config import FieldError, field_doc
 from sumo_avoid.core.geometry import footprint_corners
 from sumo_avoid.core.types import EgoTask, Keys, Observation
 from sumo_avoid.road.gaps import lane_change_length_m
+from sumo_avoid.sensing.radar import RadarParams
 
 
 @dataclass(frozen=True)
@@ -111,6 +112,8 @@ class ApfSaController(BaseController):
         self.escapes = 0
         self.failed_searches = 0
         self.passer = OncomingPass(params.passing, params.escape_reverse_speed_mps, params.apf.max_lat_speed_mps)
+        radar = getattr(ctx, "params", {}).get("sensors.radar")  # how far the front radar sees (the pass's look ahead)
+        self.radar_sight_m = (radar if radar is not None else RadarParams()).max_range_m
         self.passes = 0
 
     def add_ego(self, task: EgoTask) -> None:
@@ -217,7 +220,7 @@ class ApfSaController(BaseController):
         return sensed
 
     def _try_pass(self, vid, view, sc, st, obs, row, task) -> None:
-        sight = RADAR_SIGHT_M if obs.detections is not None else math.inf
+        sight = self.radar_sight_m if obs.detections is not None else math.inf
         t = obs.snapshot.time_s
         stretch = self.passer.start(vid, view, sc, t, task, task.cruise_speed_mps, sight,
                                     self._oncoming(view, obs, row, sc))

@@ -20,8 +20,9 @@ a lane its class may use) for a pass, as a driver does, when all of this holds:
   no sooner than the time the ego needs to drive there plus ``pass_margin_s`` (:meth:`OncomingPass.need`:
   speeding up at ``pass_accel_mps2`` to its cruise speed until its rear is past the stretch, then back
   across, its left side over the centre line, at the field's ``max_lat_speed_mps``), and the ego sees far
-  enough for a car at ``pass_oncoming_mps`` it cannot see yet (a radar sees ``max_range_m``, ground truth
-  everything). ``pass_accel_mps2`` is the ego's own, a little low: from standing 8 m behind the van of
+  enough for a car at ``pass_oncoming_mps`` it cannot see yet (a radar sees the scenario's
+  ``[sensors.radar] max_range_m``, ground truth everything: with the seed's 100 m radar a pass from standing,
+  about 7 s and 50 m, is never certain against an unseen car at 16.7 m/s, which needs some 220 m). ``pass_accel_mps2`` is the ego's own, a little low: from standing 8 m behind the van of
   van_bike_lane APF-SA is back in its lane 7.0-7.1 s and 45-49 m later on every seed that passes, which
   :meth:`OncomingPass.need` puts at 7.1 s and 50.5 m. Until 2026-11-28 the check ended at the stretch's end,
   15-20 m short of that point, and assumed 1.5 m/s^2: oncoming cars passed the point 3.8 s after the ego at
@@ -59,7 +60,6 @@ STAND_MPS = 0.5  # a blocker slower than this stands, m/s
 ABORT_D_M = 0.5  # a pass is called off only while the ego's centre is this close to its lane's centre, m
 PASS_CARROT_MIN_M = 5.0  # moving out behind the blocker, the carrot lies at least this far ahead, m
 BEHIND_M = 3.0  # an oncoming car's centre this far behind the ego's rear is past it (no back-up), m
-RADAR_SIGHT_M = 100.0  # how far a radar-driven ego sees the oncoming lane (the radar's default range), m
 
 
 @dataclass(frozen=True)
