@@ -72,19 +72,6 @@ class LaneIndex:
         direction[p] = self._directions(geoms, p, q)
         return lane, direction
 
-    def nearest_direction(self, points, within_m: float) -> np.ndarray:
-        """(M,2) points -> (M,2) unit direction of the lane each point lies in (:meth:`lane_at`), else of the
-        lane nearest to it within ``within_m`` (a point in a junction just past a lane's end), NaN where none."""
-        pts = np.asarray(points, float).reshape(-1, 2)
-        lane, direction = self.lane_at(pts)
-        miss = np.flatnonzero(lane < 0)
-        if len(miss) and len(self._lines) and within_m > 0:
-            geoms = shapely.points(pts[miss])
-            p, q = self._tree.query_nearest(geoms, max_distance=within_m, all_matches=False)
-            if len(p):
-                direction[miss[p]] = self._directions(geoms, p, q)
-        return direction
-
     def holding(self, points) -> tuple[np.ndarray, np.ndarray]:
         """(M,2) points -> every (point, lane) pair where lane :attr:`ids` [q] holds point [p]: (K,), (K,)."""
         pts = np.asarray(points, float).reshape(-1, 2)

@@ -104,10 +104,6 @@ def _surface(lanes, nodes):
 
 
 # --------------------------------------------------------------------------- Road
-#: A point this close to a normal lane (inside a junction, just past the lane's end) takes that lane's direction, m
-#: (Road.lane_heading).
-NEAR_LANE_M = 3.0
-
 class Road:
     """Immutable road geometry of one SUMO network. Build with :meth:`from_net_file`."""
 
@@ -344,12 +340,11 @@ class Road:
 
     def lane_heading(self, points) -> np.ndarray:
         """(M,2) points -> (M,) rad: the direction of the normal lane each point lies in (of several, the one
-        whose centre line is nearest), or of the one nearest within :data:`NEAR_LANE_M` (a car that has just
-        entered a junction from it, or waits at its line inside one), NaN where none (deeper inside a junction,
-        where internal lanes of every direction overlap; on a crossing or walking area; off the lanes). A radar
-        return placed on the map this way tells which way the road user it belongs to is bound to move
+        whose centre line is nearest), NaN where none (inside a junction, where internal lanes of every
+        direction overlap; on a crossing or walking area; off the lanes). A radar return placed on the map
+        this way tells which way the road user it belongs to is bound to move
         (:mod:`sumo_avoid.sensing.perception`), as an ADAS fuses its radar with its map."""
-        direction = self.lanes.nearest_direction(points, NEAR_LANE_M)
+        _, direction = self.lanes.lane_at(points)
         return np.arctan2(direction[:, 1], direction[:, 0]) if len(direction) else np.zeros(0)
 
 

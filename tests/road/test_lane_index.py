@@ -33,8 +33,3 @@ def test_lane_heading_places_points_in_normal_lanes_only():
     np.testing.assert_allclose(h[:3], [np.pi / 2, -np.pi / 2, 0.0], atol=1e-9)
     assert np.isnan(h[3:]).all()
     assert road.lane_heading(np.zeros((0, 2))).shape == (0,)
-    # S2C_1 ends at y = -11 and W2C_0 at x = -11 (the junction begins there): 2 m past their ends a car has just
-    # entered the junction from them (within NEAR_LANE_M = 3 m); 5 m from every lane, none
-    h = road.lane_heading(np.array([[1.75, -9.0], [-9.0, -5.25], [-6.0, -6.0]]))
-    np.testing.assert_allclose(h[:2], [np.pi / 2, 0.0], atol=1e-9)
-    assert np.isnan(h[2])
