@@ -134,9 +134,8 @@ def towards_path(share, closing_mps) -> np.ndarray:
 
 
 def _lane_along(det, k, small, along):
-    """Per return ``k`` of a car-sized road user: the direction of the map's normal lane it lies in (or has
-    just left for a junction: ``Road.lane_heading``), else ``along`` (the traffic's direction at the ego; the
-    boresight if None). Inside a turn the
+    """Per return ``k`` of a car-sized road user: the direction of the map's normal lane it lies in
+    (``Road.lane_heading``), else ``along`` (the traffic's direction at the ego; the boresight if None). Inside a turn the
     traffic's direction at the ego is no one else's: a car crossing in front of an ego turning right at
     Bologna's junction 50 became a box across the ego's strip, and the ego stood in the turn with its nose in
     the crossing cars' path (bologna_pepoli, radar, seed 2: 8 contacts). A labelled person or cyclist keeps
