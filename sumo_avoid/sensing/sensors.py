@@ -99,6 +99,11 @@ class RadarSensor(_Base):
         along = route_directions(None, snap.pos[rows], snap.heading[rows], self._segs)
         seen = self.front.objects(scans, along)  # one fused memory over the mounts; a tuple, like scans
         if self.road is not None:  # the returns placed on the map: the lane each lies in, labelled ones at the kerb or not
-            seen = tuple(replace(d, lane_heading=self.road.lane_heading(d.points()),
-                                 walkway=None if d.vru is None else self.road.at_kerb(d.points())) for d in seen)
+            seen = tuple(self._placed(d) for d in seen)
         return Observation(snap, ids, rows, ego_speed, self.obstacles, scans, seen, along, self.v2v)
+
+    def _placed(self, det):
+        """One scan with its returns placed on the map (their points computed once)."""
+        pts = det.points()
+        return replace(det, lane_heading=self.road.lane_heading(pts),
+                       walkway=None if det.vru is None else self.road.at_kerb(pts))
