@@ -10,7 +10,7 @@ from typing import NamedTuple
 import numpy as np
 
 from sumo_avoid.road.crossings import crossing_links
-from sumo_avoid.road.polyline import _cumlen, polyline_length, polyline_point_at, cut_spurs
+from sumo_avoid.road.polyline import _cumlen, polyline_length, polyline_point_at, cut_spurs, ease_jogs
 from sumo_avoid.road.right_of_way import RightOfWay, link_state
 from sumo_avoid.road.route import LanePiece, OncomingLane, RouteLink
 
@@ -273,6 +273,9 @@ class RoutePlanner:
         points = points.copy()
         points[kept], spur_free = cut_spurs(points[kept])  # out-and-back spurs of lanes laid apart
         keep[kept[~spur_free]] = False
+        kept = np.flatnonzero(keep)
+        points[kept], smooth = ease_jogs(points[kept])  # sideways steps of the lanes (a car cannot step aside)
+        keep[kept[~smooth]] = False
         path = points[keep]
         cum = _cumlen(path)
         kept_before = np.concatenate([[0], np.cumsum(keep)])  # kept points among the first n

@@ -1,0 +1,101 @@
+"""A road that steps sideways at a point (issue 34: lane shapes OSM-derived nets really have): Berlin's
+Doerpfeldstrasse joins two car lanes 1.57 m apart by a 1.6 m internal lane at right angles to both
+(clusterJ1_J2), a tram lane on the left, a bike lane on the right. The route's path crosses the step on a
+ramp (:func:`sumo_avoid.road.polyline.ease_jogs`) and APF-SA drives it within the road; hand values for
+the ramp, a netconvert net of the same step for the drive."""
+from __future__ import annotations
+
+import pathlib
+import subprocess
+
+import numpy as np
+import pytest
+import sumo
+
+from sumo_avoid.road import network
+from sumo_avoid.road.polyline import JOG_SLOPE, ease_jogs
+from sumo_avoid.runs import outputs, runner
+from sumo_avoid.scenario import spec as scenario
+
+BIN = pathlib.Path(sumo.SUMO_HOME) / "bin"
+
+
+def test_a_step_aside_becomes_a_ramp_centred_on_it():
+    """1.4 m across at x = 30: the ramp needs 1.4 / 0.05 = 28 m, 14 m on either side of the step."""
+    assert JOG_SLOPE == 0.05
+    out, keep = ease_jogs(np.array([[0.0, 0.0], [30.0, 0.0], [30.0, 1.4], [60.0, 1.4]]))
+    assert keep.all()
+    assert np.allclose(out, [[0.0, 0.0], [16.0, 0.0], [44.0, 1.4], [60.0, 1.4]])
+
+
+def test_a_step_over_several_vertices_drops_the_ones_between():
+    """(30, 0) -> (30.5, 0.7) -> (31, 1.4): 1.4 m across, 1 m ahead; the ramp needs 28 - 1 = 27 m more,
+    13.5 m on either side; the middle vertex goes."""
+    out, keep = ease_jogs(np.array([[0.0, 0.0], [30.0, 0.0], [30.5, 0.7], [31.0, 1.4], [60.0, 1.4]]))
+    assert keep.tolist() == [True, True, False, True, True]
+    assert np.allclose(out[keep], [[0.0, 0.0], [16.5, 0.0], [44.5, 1.4], [60.0, 1.4]])
+
+
+def test_a_short_step_is_eased_within_half_its_neighbours():
+    """Segments of 4 m before and after: each vertex moves at most 2 m."""
+    out, keep = ease_jogs(np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 1.4], [8.0, 1.4]]))
+    assert keep.all() and np.allclose(out, [[0.0, 0.0], [2.0, 0.0], [6.0, 1.4], [8.0, 1.4]])
+
+
+@pytest.mark.parametrize("pts", [
+    [[0.0, 0.0], [30.0, 0.0], [60.0, 3.2], [90.0, 3.2]],  # a lane change blended over 30 m: beyond a step's 4 m of line
+    [[0.0, 0.0], [30.0, 0.0], [33.0, 1.0], [35.0, 4.0], [35.0, 30.0]],  # a right-angle turn: no way on parallel
+    [[0.0, 0.0], [30.0, 0.0], [30.0, 0.1], [60.0, 0.1]],  # 0.1 m across: a kink, not a step
+    [[0.0, 0.0], [30.0, 0.0], [30.0, 5.0], [60.0, 5.0]],  # 5 m across: beyond a step's reach (4 m of line)
+])
+def test_lane_changes_turns_kinks_and_wide_offsets_are_kept(pts):
+    out, keep = ease_jogs(np.array(pts))
+    assert keep.all() and np.array_equal(out, np.array(pts))
+
+
+EDGES = """<edges>
+ <edge id="WM" from="W" to="M" numLanes="3" speed="13.89" shape="-200,0 0,0">
+  <lane index="0" allow="bicycle" width="2.0"/><lane index="1" width="3.2"/><lane index="2" allow="tram" width="3.2"/></edge>
+ <edge id="ME" from="M" to="E" numLanes="3" speed="13.89" shape="0,1.6 200,1.6">
+  <lane index="0" allow="bicycle" width="2.0"/><lane index="1" width="3.2"/><lane index="2" allow="tram" width="3.2"/></edge>
+</edges>"""
+
+
+def _net(tmp_path) -> pathlib.Path:
+    (tmp_path / "j.nod.xml").write_text('<nodes><node id="W" x="-200" y="0"/><node id="M" x="0" y="0"/>'
+                                        '<node id="E" x="200" y="0"/></nodes>')
+    (tmp_path / "j.edg.xml").write_text(EDGES)
+    net = tmp_path / "j.net.xml"
+    subprocess.run([str(BIN / "netconvert"), "-n", str(tmp_path / "j.nod.xml"), "-e", str(tmp_path / "j.edg.xml"),
+                    "--offset.disable-normalization", "true", "--no-turnarounds", "true", "-o", str(net)],
+                   check=True, capture_output=True)
+    return net
+
+
+@pytest.mark.sumo
+def test_the_car_lane_steps_aside_at_right_angles_and_the_path_ramps(tmp_path):
+    road = network.Road.from_net_file(_net(tmp_path))
+    step = np.asarray(road._net.getLane(":M_0_1").getShape())
+    assert np.allclose(step, [[0.0, -4.8], [0.0, -3.2]])  # netconvert's internal lane: 1.6 m straight across
+    path = road.route(["WM", "ME"], depart_lane=1, vclass="passenger").path
+    u = np.diff(path, axis=0)
+    assert np.all(u[:, 0] > 0.0) and np.abs(u[:, 1] / u[:, 0]).max() <= JOG_SLOPE + 1e-9
+
+
+@pytest.mark.sumo
+def test_apf_sa_drives_over_the_step_within_the_road(tmp_path):
+    """At cruise speed past the step, a tram lane on the left and a bike lane on the right. No footprint stays
+    inside the car lanes at the step itself (a 1.8 m car across two 3.2 m lanes 1.6 m apart sticks out 0.09 m at
+    the least); over the ramp phi_wall (the mean over the steps out) is 0.055 m. Without the ramp the car slowed
+    to 2.7 m/s at the step, swung 0.93 m into the tram lane and was out for 3.3 s (phi_wall 0.64 m)."""
+    _net(tmp_path)
+    (tmp_path / "j.rou.xml").write_text(
+        '<routes><vType id="ego_car" length="4.5" width="1.8" accel="3" decel="8" maxSpeed="20"/>'
+        '<vehicle id="ego" type="ego_car" depart="0" departLane="1" departPos="100" departSpeed="10">'
+        '<route edges="WM ME"/></vehicle></routes>')
+    (tmp_path / "jog.toml").write_text('name = "jog"\n[sim]\nnet = "j.net.xml"\nroutes = ["j.rou.xml"]\n'
+                                       'duration_s = 40.0\n[ego]\nids = ["ego"]\ncruise_speed_mps = 13.0\n')
+    m = outputs.run_metrics(runner.run(scenario.load(tmp_path / "jog.toml")))
+    assert m["goal_reached"] and m["collisions"] == 0 and m["off_road_m"] == 0.0
+    assert m["forbidden_lane_m"] == 0.0
+    assert m["phi_wall"] <= 0.1
