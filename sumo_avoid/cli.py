@@ -101,6 +101,7 @@ def cmd_run(args) -> int:
         out = pathlib.Path("reports") / "runs" / f"{scn.name}-{scn.spec.ego.controller}-s{scn.spec.sim.seed}-{stamp}"
     if args.video is not None:
         watch_cmd.check_video_path(args.video, "--video")
+    files.refuse_finished_run(out, "--out")  # nothing finished is rewritten
     made = files.make_dirs(out, "--out")  # refused now, not after the run
     kept: list[pathlib.Path] = []
     try:

@@ -84,6 +84,20 @@ class SuiteFile:
 CL = "<command line>"
 
 
+#: the files a finished run leaves in its folder (runs/outputs.py: metrics; cli.cmd_run: a crash's record)
+RUN_RECORDS = ("metrics.json", "failed.json")
+
+
+def refuse_finished_run(path, flag: str) -> None:
+    """Raise ScenarioError naming ``flag`` if the folder ``path`` already holds a finished run (its metrics or
+    its failure record): a second run into it would rewrite the first one's files."""
+    path = pathlib.Path(path)
+    found = [f for f in RUN_RECORDS if (path / f).is_file()]
+    if found:
+        raise ScenarioError(CL, flag, "a folder that holds no finished run (give another one, or remove it)",
+                            f"{path}, which holds {found[0]}")
+
+
 def make_dirs(path, flag: str) -> list[pathlib.Path]:
     """Create the output folder ``path`` (and its missing parents) now, before anything runs; return
     the folders created, for :func:`remove_dirs` if the command then fails. Raises ScenarioError

@@ -144,3 +144,15 @@ def test_suite_whose_ledger_folder_vanishes(tmp_path):
             during=when_made(led, remove(tmp_path / "gone")))
     one_line(r, "cannot write ", str(tmp_path / "gone"), GONE)
     assert not (tmp_path / "gone").exists()
+
+
+def test_run_into_a_folder_that_holds_a_finished_run_is_refused(tmp_path):
+    """Nothing finished is rewritten: a second ``run --out`` into the first one's folder is refused before
+    SUMO starts, one line naming the folder, exit 2, the first run's files byte for byte as they were."""
+    out = tmp_path / "out"
+    first = cli_in_process("run", OVERTAKING, *SHORT, "--no-plots", "--out", out)
+    assert first.returncode == 0, first.stderr
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    r = cli_in_process("run", OVERTAKING, *SHORT, "--no-plots", "--seed", "2", "--out", out)
+    one_line(r, "'--out'", str(out), "metrics.json")
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
