@@ -252,36 +252,37 @@ JOG_PARALLEL_RAD = 0.2
 
 def ease_jogs(points, reach_m: float = JOG_REACH_M, slope: float = JOG_SLOPE,
               min_m: float = JOG_MIN_M, parallel_rad: float = JOG_PARALLEL_RAD) -> tuple[np.ndarray, np.ndarray]:
-    """(points (P,2), keep (P,) bool): a (P,2) polyline (no duplicate points) with its jogs eased. A jog steps
-    aside by a across (> ``min_m``) within ``reach_m`` of line from vertex i to vertex j, steeper than ``slope``,
-    the lines before i and after j within ``parallel_rad`` of parallel. Vertex i moves back along the way in and
-    vertex j on along the way out, each by half the length the step needs at ``slope`` (at most half their
-    segments), so the line crosses from one lane's centre to the other's on a ramp centred on the step; the
-    vertices between are dropped (keep False, so every kept vertex keeps its index). OSM-derived nets shift a
-    whole road sideways at a point: Berlin's Doerpfeldstrasse, clusterJ1_J2, joins two lanes 1.57 m apart by a
-    1.6 m internal lane at right angles to both; a car cannot step aside there, and the ego that tried swung
-    0.8 m into the tram lane beside (``phi_wall`` 0.53 m on every seed). No ramp keeps a 1.8 m car inside two
-    3.2 m lanes 1.57 m apart at the step itself: centred, it is 0.09 m out on either side for a moment."""
+    """(points (Q,2), where (P,) int): a (P,2) polyline (no duplicate points) with its jogs eased, and for each
+    input vertex the index of the output vertex that stands for it. A jog steps aside by a across (> ``min_m``)
+    within ``reach_m`` of line from vertex i to vertex j, steeper than ``slope``, the lines before i and after j
+    within ``parallel_rad`` of parallel. It becomes a ramp at ``slope`` centred on the step: from a point on the
+    way in, through the step's midpoint, to a point on the way out, each end half the length the step needs at
+    ``slope`` from the step (at most half their segments). Vertices i to j - 1 stand for the midpoint (what
+    begins there, a junction's stop line, begins at the step), vertex j for the ramp's end. OSM-derived nets
+    shift a whole road sideways at a point: Berlin's Doerpfeldstrasse, clusterJ1_J2, joins two lanes 1.57 m
+    apart by a 1.6 m internal lane at right angles to both; a car cannot step aside there, and the ego that tried
+    swung 0.8 m into the tram lane beside (``phi_wall`` 0.53 m on every seed). No ramp keeps a 1.8 m car inside
+    two 3.2 m lanes 1.57 m apart at the step itself: centred, it is 0.09 m out on either side for a moment."""
     p = np.array(points, float).reshape(-1, 2)
-    keep = np.ones(len(p), bool)
     seg = np.diff(p, axis=0)
     n = np.hypot(*seg.T) if len(seg) else np.zeros(0)
     u = seg / np.maximum(n, 1e-12)[:, None]
     cum = np.concatenate([[0.0], np.cumsum(n)])
-    i = 1
-    while i < len(p) - 2:
-        j = _jog_end(p, u, cum, i, reach_m, slope, min_m, parallel_rad)
+    out, where = [p[:1]], np.zeros(len(p), np.int64)
+    count, i = 1, 1
+    while i < len(p):
+        j = _jog_end(p, u, cum, i, reach_m, slope, min_m, parallel_rad) if i < len(p) - 2 else None
         if j is None:
-            i += 1
+            out.append(p[i:i + 1])
+            where[i], count, i = count, count + 1, i + 1
             continue
         r = p[j] - p[i]
         across, ahead = abs(u[i - 1, 0] * r[1] - u[i - 1, 1] * r[0]), float(u[i - 1] @ r)
         half = min(0.5 * (across / slope - ahead), 0.5 * n[i - 1], 0.5 * n[j])
-        p[i] = p[i] - half * u[i - 1]
-        p[j] = p[j] + half * u[j]
-        keep[i + 1:j] = False
-        i = j + 1
-    return p, keep
+        a, b = p[i] - half * u[i - 1], p[j] + half * u[j]
+        out.append(np.stack([a, 0.5 * (a + b), b]))
+        where[i:j], where[j], count, i = count + 1, count + 2, count + 3, j + 1
+    return np.concatenate(out), where
 
 
 def _jog_end(p, u, cum, i: int, reach_m: float, slope: float, min_m: float, parallel_rad: float):

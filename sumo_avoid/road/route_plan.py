@@ -273,15 +273,12 @@ class RoutePlanner:
         points = points.copy()
         points[kept], spur_free = cut_spurs(points[kept])  # out-and-back spurs of lanes laid apart
         keep[kept[~spur_free]] = False
-        kept = np.flatnonzero(keep)
-        points[kept], smooth = ease_jogs(points[kept])  # sideways steps of the lanes (a car cannot step aside)
-        keep[kept[~smooth]] = False
-        path = points[keep]
+        path, where = ease_jogs(points[keep])  # sideways steps of the lanes (a car cannot step aside)
         cum = _cumlen(path)
         kept_before = np.concatenate([[0], np.cumsum(keep)])  # kept points among the first n
 
         def s_at(n: int) -> float:  # arc length where the points after the first n begin
-            return float(cum[kept_before[n] - 1]) if kept_before[n] else 0.0
+            return float(cum[where[kept_before[n] - 1]]) if kept_before[n] else 0.0
 
         links = tuple(self._link(conn, s_at(n), path, cum) for conn, n in link_at)
         limits = np.array([(s_at(n), v, turn) for v, n, turn in limit_at], float).reshape(-1, 3)

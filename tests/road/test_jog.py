@@ -21,25 +21,27 @@ BIN = pathlib.Path(sumo.SUMO_HOME) / "bin"
 
 
 def test_a_step_aside_becomes_a_ramp_centred_on_it():
-    """1.4 m across at x = 30: the ramp needs 1.4 / 0.05 = 28 m, 14 m on either side of the step."""
+    """1.4 m across at x = 30: the ramp needs 1.4 / 0.05 = 28 m, 14 m on either side of the step, through the
+    step's midpoint, which stands for the step's first vertex (a stop line there stays at the step)."""
     assert JOG_SLOPE == 0.05
-    out, keep = ease_jogs(np.array([[0.0, 0.0], [30.0, 0.0], [30.0, 1.4], [60.0, 1.4]]))
-    assert keep.all()
-    assert np.allclose(out, [[0.0, 0.0], [16.0, 0.0], [44.0, 1.4], [60.0, 1.4]])
+    out, where = ease_jogs(np.array([[0.0, 0.0], [30.0, 0.0], [30.0, 1.4], [60.0, 1.4]]))
+    assert np.allclose(out, [[0.0, 0.0], [16.0, 0.0], [30.0, 0.7], [44.0, 1.4], [60.0, 1.4]])
+    assert where.tolist() == [0, 2, 3, 4]
 
 
 def test_a_step_over_several_vertices_drops_the_ones_between():
     """(30, 0) -> (30.5, 0.7) -> (31, 1.4): 1.4 m across, 1 m ahead; the ramp needs 28 - 1 = 27 m more,
-    13.5 m on either side; the middle vertex goes."""
-    out, keep = ease_jogs(np.array([[0.0, 0.0], [30.0, 0.0], [30.5, 0.7], [31.0, 1.4], [60.0, 1.4]]))
-    assert keep.tolist() == [True, True, False, True, True]
-    assert np.allclose(out[keep], [[0.0, 0.0], [16.5, 0.0], [44.5, 1.4], [60.0, 1.4]])
+    13.5 m on either side; the middle vertex goes (the midpoint stands for it too)."""
+    out, where = ease_jogs(np.array([[0.0, 0.0], [30.0, 0.0], [30.5, 0.7], [31.0, 1.4], [60.0, 1.4]]))
+    assert np.allclose(out, [[0.0, 0.0], [16.5, 0.0], [30.5, 0.7], [44.5, 1.4], [60.0, 1.4]])
+    assert where.tolist() == [0, 2, 2, 3, 4]
 
 
 def test_a_short_step_is_eased_within_half_its_neighbours():
-    """Segments of 4 m before and after: each vertex moves at most 2 m."""
-    out, keep = ease_jogs(np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 1.4], [8.0, 1.4]]))
-    assert keep.all() and np.allclose(out, [[0.0, 0.0], [2.0, 0.0], [6.0, 1.4], [8.0, 1.4]])
+    """Segments of 4 m before and after: each end of the ramp lies at most 2 m from the step."""
+    out, where = ease_jogs(np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 1.4], [8.0, 1.4]]))
+    assert np.allclose(out, [[0.0, 0.0], [2.0, 0.0], [4.0, 0.7], [6.0, 1.4], [8.0, 1.4]])
+    assert where.tolist() == [0, 2, 3, 4]
 
 
 @pytest.mark.parametrize("pts", [
@@ -49,8 +51,8 @@ def test_a_short_step_is_eased_within_half_its_neighbours():
     [[0.0, 0.0], [30.0, 0.0], [30.0, 5.0], [60.0, 5.0]],  # 5 m across: beyond a step's reach (4 m of line)
 ])
 def test_lane_changes_turns_kinks_and_wide_offsets_are_kept(pts):
-    out, keep = ease_jogs(np.array(pts))
-    assert keep.all() and np.array_equal(out, np.array(pts))
+    out, where = ease_jogs(np.array(pts))
+    assert np.array_equal(out, np.array(pts)) and where.tolist() == list(range(len(pts)))
 
 
 EDGES = """<edges>
@@ -77,9 +79,11 @@ def test_the_car_lane_steps_aside_at_right_angles_and_the_path_ramps(tmp_path):
     road = network.Road.from_net_file(_net(tmp_path))
     step = np.asarray(road._net.getLane(":M_0_1").getShape())
     assert np.allclose(step, [[0.0, -4.8], [0.0, -3.2]])  # netconvert's internal lane: 1.6 m straight across
-    path = road.route(["WM", "ME"], depart_lane=1, vclass="passenger").path
-    u = np.diff(path, axis=0)
+    plan = road.route(["WM", "ME"], depart_lane=1, vclass="passenger")
+    u = np.diff(plan.path, axis=0)
     assert np.all(u[:, 0] > 0.0) and np.abs(u[:, 1] / u[:, 0]).max() <= JOG_SLOPE + 1e-9
+    (link,) = plan.links
+    assert abs(link.s_stop_m - 200.0) < 0.05  # the junction's line stays at the step, 200 m along WM
 
 
 @pytest.mark.sumo
