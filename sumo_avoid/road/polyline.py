@@ -243,18 +243,20 @@ def _spur(p, u, n, i: int, reach_m: float, slope: float):
 
 
 #: A jog: the line steps aside by more than JOG_MIN_M within JOG_REACH_M of line, more steeply than
-#: JOG_SLOPE (across per metre ahead), and goes on within JOG_PARALLEL_RAD of the way it came in.
+#: JOG_STEEP (across per metre ahead: 20 degrees; a bend's polygon is far flatter), and goes on within
+#: JOG_PARALLEL_RAD of the way it came in. It is eased into a ramp at JOG_SLOPE.
 JOG_MIN_M = 0.2
 JOG_REACH_M = 4.0
+JOG_STEEP = 0.36
 JOG_SLOPE = 0.05
 JOG_PARALLEL_RAD = 0.2
 
 
-def ease_jogs(points, reach_m: float = JOG_REACH_M, slope: float = JOG_SLOPE,
-              min_m: float = JOG_MIN_M, parallel_rad: float = JOG_PARALLEL_RAD) -> tuple[np.ndarray, np.ndarray]:
+def ease_jogs(points, reach_m: float = JOG_REACH_M, slope: float = JOG_SLOPE, min_m: float = JOG_MIN_M,
+              parallel_rad: float = JOG_PARALLEL_RAD, steep: float = JOG_STEEP) -> tuple[np.ndarray, np.ndarray]:
     """(points (Q,2), where (P,) int): a (P,2) polyline (no duplicate points) with its jogs eased, and for each
     input vertex the index of the output vertex that stands for it. A jog steps aside by a across (> ``min_m``)
-    within ``reach_m`` of line from vertex i to vertex j, steeper than ``slope``, the lines before i and after j
+    within ``reach_m`` of line from vertex i to vertex j, steeper than ``steep``, the lines before i and after j
     within ``parallel_rad`` of parallel. It becomes a ramp at ``slope`` centred on the step: from a point on the
     way in, through the step's midpoint, to a point on the way out, each end half the length the step needs at
     ``slope`` from the step (at most half their segments). Vertices i to j - 1 stand for the midpoint (what
@@ -271,7 +273,7 @@ def ease_jogs(points, reach_m: float = JOG_REACH_M, slope: float = JOG_SLOPE,
     out, where = [p[:1]], np.zeros(len(p), np.int64)
     count, i = 1, 1
     while i < len(p):
-        j = _jog_end(p, u, cum, i, reach_m, slope, min_m, parallel_rad) if i < len(p) - 2 else None
+        j = _jog_end(p, u, cum, i, reach_m, steep, min_m, parallel_rad) if i < len(p) - 2 else None
         if j is None:
             out.append(p[i:i + 1])
             where[i], count, i = count, count + 1, i + 1
@@ -285,7 +287,7 @@ def ease_jogs(points, reach_m: float = JOG_REACH_M, slope: float = JOG_SLOPE,
     return np.concatenate(out), where
 
 
-def _jog_end(p, u, cum, i: int, reach_m: float, slope: float, min_m: float, parallel_rad: float):
+def _jog_end(p, u, cum, i: int, reach_m: float, steep: float, min_m: float, parallel_rad: float):
     """The vertex j at which a jog that starts at vertex i ends (:func:`ease_jogs`), None where there is none."""
     for j in range(i + 1, len(p) - 1):
         if cum[j] - cum[i] > reach_m:
@@ -294,6 +296,6 @@ def _jog_end(p, u, cum, i: int, reach_m: float, slope: float, min_m: float, para
             continue
         r = p[j] - p[i]
         across, ahead = abs(u[i - 1, 0] * r[1] - u[i - 1, 1] * r[0]), float(u[i - 1] @ r)
-        if across > min_m and across > slope * max(ahead, 0.0):
+        if across > min_m and across > steep * max(ahead, 0.0):
             return j
     return None

@@ -49,6 +49,9 @@ def test_a_short_step_is_eased_within_half_its_neighbours():
     [[0.0, 0.0], [30.0, 0.0], [33.0, 1.0], [35.0, 4.0], [35.0, 30.0]],  # a right-angle turn: no way on parallel
     [[0.0, 0.0], [30.0, 0.0], [30.0, 0.1], [60.0, 0.1]],  # 0.1 m across: a kink, not a step
     [[0.0, 0.0], [30.0, 0.0], [30.0, 5.0], [60.0, 5.0]],  # 5 m across: beyond a step's reach (4 m of line)
+    # a roundabout's ring polygon into its exit (scenarios/roads/roundabout1, rEN_0 -> N_out_0): 0.25 m across
+    # the way in over 2.2 m, a bend, not a step (flatter than 20 degrees)
+    [[10.88, 18.84], [9.19, 19.72], [7.44, 20.44], [7.12, 20.54], [4.77, 21.59], [3.09, 23.02]],
 ])
 def test_lane_changes_turns_kinks_and_wide_offsets_are_kept(pts):
     out, where = ease_jogs(np.array(pts))
