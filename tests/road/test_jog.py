@@ -112,13 +112,14 @@ BERLIN = pathlib.Path(__file__).resolve().parents[2].parent / "shared" / "cities
 
 
 @pytest.mark.skipif(not BERLIN.exists(), reason="../shared/cities is not beside the project")
-def test_berlin_doerpfeldstrasse_step_is_a_ramp_and_its_signal_line_stays():
+def test_berlin_doerpfeldstrasse_step_is_a_ramp_and_its_junction_line_stays():
     """-45875465_1 (49.34 m) -> :clusterJ1_J2_2_0 (1.60 m, at right angles) -> -45875465.50_1: the path turns by
-    at most atan(0.05) and 1 mrad anywhere (the two lanes are 0.1 mrad off parallel), and the signal's stop line lies where the car lane ends, 49.34 m along."""
+    at most atan(0.05) and 1 mrad anywhere (the two lanes are 0.1 mrad off parallel), and the junction's stop line (a signalised junction; the car's link has no signal of its own) lies where
+    the car lane ends, 49.34 m along."""
     road = network.Road.from_net_file(BERLIN)
     plan = road.route(["-45875465", "-45875465.50"], depart_lane=1, vclass="passenger")
     u = np.diff(plan.path, axis=0)
     h = np.arctan2(u[:, 1], u[:, 0])
     assert np.abs(np.diff(h)).max() <= np.arctan(JOG_SLOPE) + 1e-3
     (link,) = plan.links
-    assert link.tls == "clusterJ1_J2" and abs(link.s_stop_m - 49.34) < 0.05
+    assert link.junction == "clusterJ1_J2" and abs(link.s_stop_m - 49.34) < 0.05
