@@ -94,8 +94,8 @@ def refuse_finished_run(path, flag: str) -> None:
     path = pathlib.Path(path)
     found = [f for f in RUN_RECORDS if (path / f).is_file()]
     if found:
-        raise ScenarioError(CL, flag, "a folder that holds no finished run (give another one, or remove it)",
-                            f"{path}, which holds {found[0]}")
+        raise ScenarioError(CL, flag, f"a folder that holds no finished run (this one holds {found[0]}: give "
+                            "another one, or remove it)", str(path))
 
 
 def make_dirs(path, flag: str) -> list[pathlib.Path]:
