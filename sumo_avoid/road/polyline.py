@@ -273,13 +273,12 @@ def ease_jogs(points, reach_m: float = JOG_REACH_M, slope: float = JOG_SLOPE, mi
     out, where = [p[:1]], np.zeros(len(p), np.int64)
     count, i = 1, 1
     while i < len(p):
-        j = _jog_end(p, u, cum, i, reach_m, steep, min_m, parallel_rad) if i < len(p) - 2 else None
-        if j is None:
+        jog = _jog_end(p, u, cum, i, reach_m, steep, min_m, np.cos(parallel_rad)) if i < len(p) - 2 else None
+        if jog is None:
             out.append(p[i:i + 1])
             where[i], count, i = count, count + 1, i + 1
             continue
-        r = p[j] - p[i]
-        across, ahead = abs(u[i - 1, 0] * r[1] - u[i - 1, 1] * r[0]), float(u[i - 1] @ r)
+        j, across, ahead = jog
         half = min(0.5 * (across / slope - ahead), 0.5 * n[i - 1], 0.5 * n[j])
         a, b = p[i] - half * u[i - 1], p[j] + half * u[j]
         out.append(np.stack([a, 0.5 * (a + b), b]))
@@ -287,15 +286,16 @@ def ease_jogs(points, reach_m: float = JOG_REACH_M, slope: float = JOG_SLOPE, mi
     return np.concatenate(out), where
 
 
-def _jog_end(p, u, cum, i: int, reach_m: float, steep: float, min_m: float, parallel_rad: float):
-    """The vertex j at which a jog that starts at vertex i ends (:func:`ease_jogs`), None where there is none."""
+def _jog_end(p, u, cum, i: int, reach_m: float, steep: float, min_m: float, cos_parallel: float):
+    """(j, across, ahead) of a jog that starts at vertex i (:func:`ease_jogs`): the vertex it ends at, how far it
+    steps aside and how far on, m; None where there is none."""
     for j in range(i + 1, len(p) - 1):
         if cum[j] - cum[i] > reach_m:
             return None
-        if u[i - 1] @ u[j] < np.cos(parallel_rad):
+        if u[i - 1] @ u[j] < cos_parallel:
             continue
         r = p[j] - p[i]
         across, ahead = abs(u[i - 1, 0] * r[1] - u[i - 1, 1] * r[0]), float(u[i - 1] @ r)
         if across > min_m and across > steep * max(ahead, 0.0):
-            return j
+            return j, across, ahead
     return None
