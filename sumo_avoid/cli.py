@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import datetime
+import errno
 import json
 import pathlib
 import shutil
@@ -20,7 +21,7 @@ import tempfile
 from sumo_avoid.control import CONTROLLERS
 from sumo_avoid.core.config import ScenarioError, ScenarioErrors
 from sumo_avoid.core.registry import Entry
-from sumo_avoid.core.output_error import OutputError, reason, writing
+from sumo_avoid.core.output_error import OutputError, from_errno, reason, writing
 from sumo_avoid.runs import faults, runner, worker
 from sumo_avoid.runs.job import RunJob, RunOutcome
 from sumo_avoid.scenario import spec as scenario
@@ -188,9 +189,14 @@ _RUN_FILES = ("result.json", "stdout.txt", "stderr.txt", "progress")
 
 def _keep(tmp: pathlib.Path, out: pathlib.Path, kept: list, only=None) -> None:
     """Move the run's outputs from its private folder into ``out`` (an existing folder), each path in
-    ``kept`` before it is written; raises OutputError naming the file that cannot be written."""
+    ``kept`` before it is written; raises OutputError naming the file that cannot be written. A folder of a
+    file's name in ``out`` is refused before anything moves (a move would put the file inside it)."""
+    names = [f.name for f in sorted(tmp.iterdir()) if f.name not in _RUN_FILES and (only is None or f.name in only)]
+    for name in names:
+        if (out / name).is_dir():
+            raise from_errno(errno.EISDIR, out / name)
     for f in sorted(tmp.iterdir()):
-        if f.name not in _RUN_FILES and (only is None or f.name in only):
+        if f.name in names:
             kept.append(out / f.name)
             with writing(out / f.name):  # a vanished ``out`` is not made again
                 shutil.move(str(f), str(out / f.name))

@@ -156,3 +156,13 @@ def test_run_into_a_folder_that_holds_a_finished_run_is_refused(tmp_path):
     r = cli_in_process("run", OVERTAKING, *SHORT, "--no-plots", "--seed", "2", "--out", out)
     one_line(r, "'--out'", str(out), "metrics.json")
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+def test_run_whose_out_folder_has_a_folder_of_a_result_files_name(tmp_path):
+    """A folder named metrics.json in ``--out``: the run's file was moved inside it and the run said it was done
+    (exit 0). Now one line naming it, exit 2, nothing written beside it."""
+    out = tmp_path / "out"
+    (out / "metrics.json").mkdir(parents=True)
+    r = cli_in_process("run", OVERTAKING, *SHORT, "--no-plots", "--out", out)
+    one_line(r, f"cannot write {out / 'metrics.json'}: Is a directory")
+    assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*")) == ["metrics.json"]
