@@ -8,7 +8,7 @@ import pandas as pd
 from sumo_avoid import __version__
 from sumo_avoid.core.geometry import footprint_corners
 from sumo_avoid.core.types import Keys
-from sumo_avoid.metrics import basic, vru
+from sumo_avoid.metrics import basic, contacts, vru
 from sumo_avoid.metrics.base import Metric
 from sumo_avoid.metrics.ego_rows import EgoRows
 from sumo_avoid.metrics.pairs import Rows
@@ -94,7 +94,8 @@ class RunInfo(Metric):
 class Collisions(Metric):
     """Footprint contact events found by the plug-in, SUMO's own reports, and where they disagree."""
 
-    keys = Keys(("collisions", "sumo_collisions", "sumo_ego_collisions"),
+    keys = Keys(("collisions", "collisions_ego_stopped", "collisions_other_jumped", "max_impact_speed_mps",
+                 "sumo_collisions", "sumo_ego_collisions"),
                 nested=("collision_events", "sumo_collision_events", "collision_pairs_only_ours",
                         "collision_pairs_only_sumo", "collision_disagreements"))
 
@@ -105,11 +106,26 @@ class Collisions(Metric):
         ours = {tuple(sorted(p)) for p in zip(events["a"], events["b"])}
         theirs = {tuple(sorted(p)) for p in zip(sumo["a"], sumo["b"])}
         return {"collisions": len(events), "collision_events": events.to_dict(orient="records"),
+                **contact_counts(events),
                 "sumo_collisions": len(sumo), "sumo_collision_events": sumo.to_dict(orient="records"),
                 "sumo_ego_collisions": sum(a in egos or b in egos for a, b in zip(sumo["a"], sumo["b"])),
                 "collision_pairs_only_ours": sorted(map(list, ours - theirs)),
                 "collision_pairs_only_sumo": sorted(map(list, theirs - ours)),
                 "collision_disagreements": disagreements(recorded(run), events, sumo, ours - theirs, theirs - ours)}
+
+
+def contact_counts(events: pd.DataFrame, prefix: str = "collisions", mask=None) -> dict:
+    """How the contacts happened, counted (metrics.contacts): with the ego standing, with the other party arriving
+    by a jump, and the largest impact speed (None without a contact)."""
+    ev = events if mask is None else events[mask]
+    if "kind" not in ev:
+        ev = ev.assign(kind=pd.Series(dtype=object), other_jumped=pd.Series(dtype=bool),
+                       impact_speed_mps=pd.Series(dtype=float))
+    counts = {f"{prefix}_ego_stopped": int((ev["kind"] == "ego_stopped").sum()),
+              f"{prefix}_other_jumped": int(ev["other_jumped"].astype(bool).sum())}
+    impact = ev["impact_speed_mps"].astype(float)
+    return {**counts, "max_impact_speed_" + ("vru_" if prefix != "collisions" else "") + "mps":
+            float(impact.max()) if len(impact) else None}
 
 
 def person_pairs(run: RunResult):
@@ -130,11 +146,11 @@ def all_collision_events(run: RunResult):
         else:
             ev = pd.concat([cars, people], ignore_index=True)
         ev = ev.sort_values(["step", "a", "b"], kind="stable").reset_index(drop=True)
+        egos = set(run.traj.loc[run.traj["is_ego"].astype(bool), "id"].astype(str)) if len(run.traj) else set()
         if run.classes:  # a run recorded with classes (every run since persons are recorded)
-            egos = set(run.traj.loc[run.traj["is_ego"].astype(bool), "id"].astype(str))
             other = [b if a in egos else a for a, b in zip(ev["a"].astype(str), ev["b"].astype(str))]
             ev = ev.assign(other_class=[run.classes.get(o, "") for o in other])
-        return ev
+        return contacts.describe(ev, run.traj, run.persons, egos)  # how each happened
     return run.memo("collision_events", compute)
 
 
@@ -205,13 +221,14 @@ class VulnerableRoadUsers(Metric):
     """SPEC §6: the egos' contacts with persons and cyclists (``vru_collisions``, also in ``collisions``)
     and the smallest gap to one (:mod:`sumo_avoid.metrics.vru`)."""
 
-    keys = Keys(("vru_collisions", "min_gap_vru_m"))
+    keys = Keys(("vru_collisions", "vru_collisions_ego_stopped", "vru_collisions_other_jumped",
+                 "max_impact_speed_vru_mps", "min_gap_vru_m"))
 
     def compute(self, run: RunResult) -> dict:
         ev = all_collision_events(run)
-        hit = int(ev["other_class"].isin(vru.VRU_CLASSES).sum()) if "other_class" in ev else 0
+        is_vru = ev["other_class"].isin(vru.VRU_CLASSES) if "other_class" in ev else pd.Series(False, index=ev.index)
         gap = vru.min_gap_vru_m(person_pairs(run), vru.cyclist_gaps(run.traj, run.classes, road_apart(run)))
-        return {"vru_collisions": hit, "min_gap_vru_m": gap}
+        return {"vru_collisions": int(is_vru.sum()), **contact_counts(ev, "vru_collisions", is_vru), "min_gap_vru_m": gap}
 
 
 class MinGap(Metric):
