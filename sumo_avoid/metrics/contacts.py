@@ -42,24 +42,29 @@ FIELDS = ["ego", "ego_speed_mps", "other_speed_mps", "impact_speed_mps", "kind",
 _COLS = ["step", "time_s", "id", "x", "y", "vx", "vy", "speed", "heading", "length", "width"]
 
 
-def describe(events: pd.DataFrame, traj: pd.DataFrame, persons: pd.DataFrame | None, egos: set) -> pd.DataFrame:
-    """``events`` with the columns of :data:`FIELDS` added (one row per event, same order)."""
+def describe(events: pd.DataFrame, traj: pd.DataFrame, persons: pd.DataFrame | None, egos: set,
+             with_person: np.ndarray | None = None) -> pd.DataFrame:
+    """``events`` with the columns of :data:`FIELDS` added (one row per event, same order). ``with_person``:
+    per event, is the other party a person (SUMO keeps persons' and vehicles' ids apart, so one id may name
+    both); by default, an id found among the recorded persons is one."""
     if events.empty:
         return events.assign(**{f: pd.Series(dtype=object) for f in FIELDS})
     a, b = events["a"].astype(str).to_numpy(), events["b"].astype(str).to_numpy()
     ego = np.where(np.isin(a, list(egos)), a, b)
     other = np.where(ego == a, b, a)
-    people = set() if persons is None or persons.empty else set(persons["id"].astype(str))
+    if with_person is None:
+        people = set() if persons is None or persons.empty else set(persons["id"].astype(str))
+        with_person = np.array([o in people for o in other], bool)
     wanted = set(ego) | set(other)
-    rows = {}  # id -> its recorded rows, by step
-    for table in (traj, persons):
+    rows = ({}, {})  # vehicles', persons': id -> its recorded rows, by step
+    for table, into in ((traj, rows[0]), (persons, rows[1])):
         if table is None or table.empty:
             continue
         t = table.loc[table["id"].astype(str).isin(wanted), _COLS]
-        for vid, g in t.groupby(t["id"].astype(str), sort=False):
-            rows.setdefault(vid, g.set_index("step").sort_index())
+        into.update((vid, g.set_index("step").sort_index()) for vid, g in t.groupby(t["id"].astype(str), sort=False))
     start = int(traj["step"].min())
-    out = [_one(rows[e], rows[o], int(step), o in people, start) for e, o, step in zip(ego, other, events["step"])]
+    out = [_one(rows[0][e], rows[int(p)][o], int(step), bool(p), start)
+           for e, o, step, p in zip(ego, other, events["step"], with_person)]
     described = pd.DataFrame(out, columns=FIELDS[1:], index=events.index)
     return events.assign(ego=ego, **{c: described[c] for c in FIELDS[1:]})
 

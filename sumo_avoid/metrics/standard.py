@@ -140,17 +140,18 @@ def all_collision_events(run: RunResult):
         cars = basic.collision_events(run.traj, rows=pair_rows(run))
         people = vru.person_contact_events(run.traj, person_pairs(run))
         if people.empty:
-            ev = cars
+            ev = cars.assign(_person=False)
         elif cars.empty:
-            ev = people
+            ev = people.assign(_person=True)
         else:
-            ev = pd.concat([cars, people], ignore_index=True)
+            ev = pd.concat([cars.assign(_person=False), people.assign(_person=True)], ignore_index=True)
         ev = ev.sort_values(["step", "a", "b"], kind="stable").reset_index(drop=True)
+        with_person = ev.pop("_person").to_numpy(bool)
         egos = set(run.traj.loc[run.traj["is_ego"].astype(bool), "id"].astype(str)) if len(run.traj) else set()
         if run.classes:  # a run recorded with classes (every run since persons are recorded)
             other = [b if a in egos else a for a, b in zip(ev["a"].astype(str), ev["b"].astype(str))]
             ev = ev.assign(other_class=[run.classes.get(o, "") for o in other])
-        return contacts.describe(ev, run.traj, run.persons, egos)  # how each happened
+        return contacts.describe(ev, run.traj, run.persons, egos, with_person)  # how each happened
     return run.memo("collision_events", compute)
 
 

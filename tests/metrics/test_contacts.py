@@ -91,3 +91,14 @@ def test_no_events_gives_the_columns():
     ev = pd.DataFrame(columns=["step", "time_s", "a", "b", "x", "y"])
     out = describe(ev, pd.DataFrame([row(0, "E", 0, 0, ego=True)]), None, {"E"})
     assert out.empty and {"kind", "impact_speed_mps", "other_jumped", "ego"} <= set(out.columns)
+
+
+def test_a_person_and_a_vehicle_of_one_id_are_told_apart():
+    """SUMO keeps persons' and vehicles' ids apart: the event says which one touched the ego."""
+    ego = [row(s, "E", 0.0, 0.0, vx=5.0, ego=True) for s in range(N + 1)]
+    car = [row(s, "X", 100.0, 100.0, vx=9.0) for s in range(N + 1)]
+    person = steady(2.1, 0.0, vy=1.2, length=0.5, width=0.4)
+    ev = pd.DataFrame([{"step": N, "time_s": 0.1 * N, "a": "E", "b": "X", "x": 0.0, "y": 0.0}] * 2)
+    out = describe(ev, pd.DataFrame(ego + car), pd.DataFrame(person), {"E"}, np.array([True, False]))
+    assert out["other_speed_mps"].tolist() == [1.2, 9.0]
+    assert out["kind"].tolist() == ["front", "lateral"]
