@@ -42,6 +42,15 @@ def _other(e: dict) -> str:
     return ""
 
 
+def _how(e: dict) -> str:
+    """How a contact happened (metrics.contacts), e.g. " (ego stopped, 5.1 m/s)"; "" for other events."""
+    if not e.get("kind"):
+        return ""
+    speed = e.get("impact_speed_mps")
+    jumped = ", it jumped" if e.get("other_jumped") else ""
+    return f" ({str(e['kind']).replace('_', ' ')}" + (f", {speed:.1f} m/s" if speed is not None else "") + f"{jumped})"
+
+
 def events(rec: Recording) -> list[Event]:
     """Every event of the run, sorted by time."""
     out = []
@@ -49,11 +58,12 @@ def events(rec: Recording) -> list[Event]:
         for e in rec.metrics.get(key) or []:
             if not isinstance(e, dict) or "time_s" not in e or (only_violations and not e.get("violation")):
                 continue
-            ego = str(e.get("a") or e.get("ego") or (rec.egos[0] if rec.egos else ""))
+            ego = str(e.get("ego") or e.get("a") or (rec.egos[0] if rec.egos else ""))
             t = float(e["time_s"])
             x, y = (float(e["x"]), float(e["y"])) if "x" in e and "y" in e else _ego_xy(rec, ego, t)
-            other = _other(e)
-            out.append(Event(t, kind, f"{t:.1f} s {kind}: {ego}" + (f" with {other}" if other else ""), x, y, ego, other))
+            other = _other(e) if "a" not in e else str(e["b"] if str(e["a"]) == ego else e["a"])
+            out.append(Event(t, kind, f"{t:.1f} s {kind}{_how(e)}: {ego}" + (f" with {other}" if other else ""),
+                             x, y, ego, other))
     if rec.ssm is not None:
         for r in rec.ssm.to_dict(orient="records"):
             t = r.get("ttc_time_s") if r.get("ttc_time_s") == r.get("ttc_time_s") else r.get("begin_s")
