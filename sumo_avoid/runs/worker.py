@@ -38,7 +38,6 @@ import shutil
 import signal
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 import uuid
@@ -147,7 +146,7 @@ def run_in(tmp: pathlib.Path, job: RunJob, timeout_s: float = math.inf, start: s
     tmp = pathlib.Path(tmp).absolute()
     job = dataclasses.replace(job, out_dir=str(tmp))
     started, t0 = now(), time.perf_counter()
-    scratch = _scratch()
+    scratch = _scratch(tmp)
     message = {"job": job.to_json(), "id": tmp.name, "timeout_s": timeout_s, "parent": os.getpid(),
                "crash": faults.crash_for(job), "scratch": scratch}  # each start adds "dispatch_wall" as it hands the run over
     try:
@@ -165,11 +164,15 @@ def run_in(tmp: pathlib.Path, job: RunJob, timeout_s: float = math.inf, start: s
                                clock_s=dict(res.clock_s, ended_wall=time.time()))
 
 
-def _scratch() -> str | None:
-    """A fresh folder for the child's temporary files, removed by the parent once the child has ended (a child
-    killed by a signal or a timeout cannot clean up after itself); None (the system's default) if none can be made."""
+def _scratch(tmp: pathlib.Path) -> str | None:
+    """A fresh folder for the child's temporary files inside the run's own folder, removed by the parent once the
+    child has ended (a child killed by a signal or a timeout cannot clean up after itself; a killed batch's
+    partial run folders, and so this, go when it resumes: studies.pools.discard_unrecorded); None (the system's
+    default) if none can be made. (In the system's temp folder, every batch killed mid-run left one there.)"""
     try:
-        return tempfile.mkdtemp(prefix="sumo-avoid-scratch-")
+        path = tmp / ".scratch"
+        path.mkdir()
+        return str(path)
     except OSError:
         return None
 

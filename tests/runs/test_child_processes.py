@@ -115,14 +115,19 @@ def test_crashes_cost_only_their_run_and_sigkilled_batch_resumes(tmp_path, monke
     specs, opts = batch.load_batch_file(bf)
     assert len(specs) == 12  # 5 seeds x 2 controllers, and the two crashing runs
     db = opts["ledger"]
+    sys_tmp = tmp_path / "sys_tmp"  # the system's temp folder for the killed batch
+    sys_tmp.mkdir()
     proc = subprocess.Popen([sys.executable, "-m", "sumo_avoid.cli", "batch", str(bf)], cwd=ROOT,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                            env={**os.environ, "CI": "true", **ABORT_102})
+                            env={**os.environ, "CI": "true", "TMPDIR": str(sys_tmp), **ABORT_102})
     try:
         before = _kill_midway(proc, db, at=4)
     finally:
         proc.kill()
     assert 4 <= len(before) < 12
+    # the killed runs' temporary files (SUMO's SSM output, rewritten route files) are in their partial run
+    # folders beside the ledger, which the resume removes: none in the system's temp folder (one each, for good)
+    assert not list(sys_tmp.glob("sumo-avoid-*")), sorted(p.name for p in sys_tmp.iterdir())
 
     r = _cli("batch", bf, env=ABORT_102)
     assert r.returncode == 1, r.stderr  # 1: the batch has failed runs
@@ -142,6 +147,7 @@ def test_crashes_cost_only_their_run_and_sigkilled_batch_resumes(tmp_path, monke
     for a in done["artifacts"]:
         assert (db.parent / a / "metrics.json").is_file() and (db.parent / a / "trajectories.csv").is_file()
     assert (db.parent / "ledger.csv").is_file()
+    assert not list((db.parent / ".tmp").glob("*"))  # the killed runs' partial folders went with the resume
 
     r = cli_in_process("batch", bf, cwd=ROOT)  # a third time: nothing left to do (nothing starts SUMO: in process)
     assert "12 of 12 runs already recorded" in r.stdout and ledger.row_hashes(db) == after
