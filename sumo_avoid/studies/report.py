@@ -39,7 +39,8 @@ from sumo_avoid.studies.files import CL, check_out_file, make_dirs, remove_dirs,
 from sumo_avoid.studies.watch_cmd import write_viewer
 from sumo_avoid.road.network import Road
 
-METRICS = ("collisions", "min_gap_m", "phi_coll", "phi_wall", "mean_speed_mps", "time_to_goal_s",
+METRICS = ("collisions", "vru_collisions", "collisions_ego_stopped", "max_impact_speed_mps", "min_gap_m", "phi_coll",
+           "phi_wall", "mean_speed_mps", "time_to_goal_s",
            "path_length_m", "sumo_collisions", "min_ttc_s", "min_ttc2d_s", "max_drac_mps2", "min_pet_s",
            "wrong_way_m", "off_road_m", "max_abs_jerk_mps3", "max_lat_accel_mps2")
 
@@ -133,6 +134,8 @@ def summary(df):
 
         rows.append({**dict(zip(group, key)), "runs": len(g), "done": len(d), "failed": len(g) - len(d),
                      "goal_reached_rate": agg("goal_reached", "mean"), "collisions_total": agg("collisions", "sum"),
+                     "vru_collisions_total": agg("vru_collisions", "sum"),
+                     "collisions_ego_stopped_total": agg("collisions_ego_stopped", "sum"),
                      "min_gap_m_min": agg("min_gap_m", "min"), "phi_wall_max": agg("phi_wall", "max"),
                      "phi_coll_mean": agg("phi_coll", "mean"), "mean_speed_mps_mean": agg("mean_speed_mps", "mean"),
                      "min_ttc_s_min": agg("min_ttc_s", "min"), "min_ttc2d_s_min": agg("min_ttc2d_s", "min"),

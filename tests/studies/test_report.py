@@ -99,6 +99,8 @@ def test_report_is_self_contained_and_matches_the_ledger(study, tmp_path):
         assert (int(row["runs"]), int(row["done"]), int(row["failed"])) == (len(g), len(d), len(g) - len(d))
         if len(d):
             assert _close(row["collisions_total"], d["collisions"].sum())
+            assert _close(row["vru_collisions_total"], d["vru_collisions"].sum())
+            assert _close(row["collisions_ego_stopped_total"], d["collisions_ego_stopped"].sum())
             assert _close(row["min_gap_m_min"], d["min_gap_m"].min())
             assert _close(row["goal_reached_rate"], d["goal_reached"].mean())
             assert _close(row["mean_speed_mps_mean"], d["mean_speed_mps"].mean())
