@@ -32,6 +32,9 @@ from sumo_avoid.sensing.perception import obstacle_vehicles, towards_path
 MAX_ABS_D_M = 20.0
 #: A vehicle whose footprint stays this far outside the ego's lanes is no obstacle to it, m.
 OUTSIDE_MARGIN_M = 0.2
+#: A person on a walkway reaching this far into the ego's lanes stands on the carriageway (SUMO's corner waiting places
+#: reach 0.2 m in), m.
+WALKWAY_INTO_LANE_M = 0.5
 #: On a drivable line the bounds of the lanes stay at least this far from a car on it, m.
 LINE_CLEAR_M = 1.0
 #: On a drivable line, the speed leaves this share of the largest yaw rate for corrections.
@@ -306,15 +309,23 @@ class RoadView:
             line_lo, line_hi = self.corridor(os_)
             lo, hi = np.minimum(lo, line_lo + off), np.maximum(hi, line_hi + off)
             keep = (od + half > lo - OUTSIDE_MARGIN_M) & (od - half < hi + OUTSIDE_MARGIN_M)
+            # a person on a walkway whose body reaches well into the ego's lanes (a junction's walking area over its
+            # internal lane; SUMO puts people waiting at a corner up to 0.2 m in) stands on the carriageway
+            deep = ((od + half > lo + WALKWAY_INTO_LANE_M) & (od - half < hi - WALKWAY_INTO_LANE_M))[keep]
             os_, od, o_rel, o_len, o_wid, o_vel = os_[keep], od[keep], o_rel[keep], o_len[keep], o_wid[keep], o_vel[keep]
             kerb = kerb[keep]
             # a person or cyclist in or at the ego's lanes counts as grown by vru_margin_m all round (one
             # on the sidewalk beside them is behind the bound, as above: the ego passes it, not crawls), a
             # person on a walkway by its share of it (perception._weight) while it walks towards the ego's
             # path; one walking along the kerb is passed at its size (signal_crossing_right, radar, seed 1:
-            # pushed 0.65 m over by people walking on the sidewalk, the ego met a car in the next lane)
+            # pushed 0.65 m over by people walking on the sidewalk, the ego met a car in the next lane); one on a
+            # walking area deep in the ego's lanes counts as on the carriageway (unseen 2242: a person crossing the
+            # ego's left turn on a walking area over its internal lane, walking away from the side the ego had
+            # drifted to, was passed at its size; the ego, pushed back from the lane's edge, hit it at 2.4 m/s)
             vs, vd = self.frame.velocity_to_frenet(os_, od, o_vel)
-            grow = 2.0 * vru_margin_m * towards_path(np.asarray(vru, float)[keep], vd * np.sign(d_raw - od))
+            share = np.where(kerb & deep, 1.0, np.asarray(vru, float)[keep])
+            kerb = kerb & ~deep
+            grow = 2.0 * vru_margin_m * towards_path(share, vd * np.sign(d_raw - od))
             o_len, o_wid = o_len + grow, o_wid + grow
             od, o_rel, o_vel = self._from_line(os_, od, o_rel, np.column_stack([vs, vd]))
             o_pos = np.column_stack([os_, od])
