@@ -26,15 +26,12 @@ from sumo_avoid.road.route_lanes import RouteLanes
 from sumo_avoid.road.polyline import arc_lengths
 from sumo_avoid.road.regulation import legal_limits, limit_index
 from sumo_avoid.core.types import EgoTask, Observation
-from sumo_avoid.sensing.perception import obstacle_vehicles, towards_path
+from sumo_avoid.sensing.perception import obstacle_vehicles, on_carriageway, towards_path
 
 #: Vehicles farther than this across the path are not part of the ego's road scene, m.
 MAX_ABS_D_M = 20.0
 #: A vehicle whose footprint stays this far outside the ego's lanes is no obstacle to it, m.
 OUTSIDE_MARGIN_M = 0.2
-#: A person on a walkway reaching this far into the ego's lanes stands on the carriageway (SUMO's corner waiting places
-#: reach 0.2 m in), m.
-WALKWAY_INTO_LANE_M = 0.5
 #: On a drivable line the bounds of the lanes stay at least this far from a car on it, m.
 LINE_CLEAR_M = 1.0
 #: On a drivable line, the speed leaves this share of the largest yaw rate for corrections.
@@ -309,9 +306,7 @@ class RoadView:
             line_lo, line_hi = self.corridor(os_)
             lo, hi = np.minimum(lo, line_lo + off), np.maximum(hi, line_hi + off)
             keep = (od + half > lo - OUTSIDE_MARGIN_M) & (od - half < hi + OUTSIDE_MARGIN_M)
-            # a person on a walkway whose body reaches well into the ego's lanes (a junction's walking area over its
-            # internal lane; SUMO puts people waiting at a corner up to 0.2 m in) stands on the carriageway
-            deep = ((od + half > lo + WALKWAY_INTO_LANE_M) & (od - half < hi - WALKWAY_INTO_LANE_M))[keep]
+            half_k, lo_k, hi_k = half[keep], lo[keep], hi[keep]
             os_, od, o_rel, o_len, o_wid, o_vel = os_[keep], od[keep], o_rel[keep], o_len[keep], o_wid[keep], o_vel[keep]
             kerb = kerb[keep]
             # a person or cyclist in or at the ego's lanes counts as grown by vru_margin_m all round (one
@@ -323,8 +318,7 @@ class RoadView:
             # ego's left turn on a walking area over its internal lane, walking away from the side the ego had
             # drifted to, was passed at its size; the ego, pushed back from the lane's edge, hit it at 2.4 m/s)
             vs, vd = self.frame.velocity_to_frenet(os_, od, o_vel)
-            share = np.where(kerb & deep, 1.0, np.asarray(vru, float)[keep])
-            kerb = kerb & ~deep
+            share, kerb = on_carriageway(np.asarray(vru, float)[keep], kerb, od, half_k, lo_k, hi_k)
             grow = 2.0 * vru_margin_m * towards_path(share, vd * np.sign(d_raw - od))
             o_len, o_wid = o_len + grow, o_wid + grow
             od, o_rel, o_vel = self._from_line(os_, od, o_rel, np.column_stack([vs, vd]))
