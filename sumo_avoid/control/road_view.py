@@ -306,7 +306,7 @@ class RoadView:
             line_lo, line_hi = self.corridor(os_)
             lo, hi = np.minimum(lo, line_lo + off), np.maximum(hi, line_hi + off)
             keep = (od + half > lo - OUTSIDE_MARGIN_M) & (od - half < hi + OUTSIDE_MARGIN_M)
-            half_k, lo_k, hi_k = half[keep], lo[keep], hi[keep]
+            lo_k, hi_k = lo[keep], hi[keep]
             os_, od, o_rel, o_len, o_wid, o_vel = os_[keep], od[keep], o_rel[keep], o_len[keep], o_wid[keep], o_vel[keep]
             kerb = kerb[keep]
             # a person or cyclist in or at the ego's lanes counts as grown by vru_margin_m all round (one
@@ -314,11 +314,11 @@ class RoadView:
             # person on a walkway by its share of it (perception._weight) while it walks towards the ego's
             # path; one walking along the kerb is passed at its size (signal_crossing_right, radar, seed 1:
             # pushed 0.65 m over by people walking on the sidewalk, the ego met a car in the next lane); one on a
-            # walking area deep in the ego's lanes counts as on the carriageway (unseen 2242: a person crossing the
-            # ego's left turn on a walking area over its internal lane, walking away from the side the ego had
+            # walkway with its centre well inside the ego's lanes is on the carriageway (unseen 2242: a person crossing
+            # the ego's left turn on a walking area over its internal lane, walking away from the side the ego had
             # drifted to, was passed at its size; the ego, pushed back from the lane's edge, hit it at 2.4 m/s)
             vs, vd = self.frame.velocity_to_frenet(os_, od, o_vel)
-            share, kerb = on_carriageway(np.asarray(vru, float)[keep], kerb, od, half_k, lo_k, hi_k)
+            share, kerb = on_carriageway(np.asarray(vru, float)[keep], kerb, od, lo_k, hi_k)
             grow = 2.0 * vru_margin_m * towards_path(share, vd * np.sign(d_raw - od))
             o_len, o_wid = o_len + grow, o_wid + grow
             od, o_rel, o_vel = self._from_line(os_, od, o_rel, np.column_stack([vs, vd]))

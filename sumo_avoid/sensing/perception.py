@@ -20,7 +20,7 @@ ASSUMED_LENGTH_M = 4.5
 ASSUMED_WIDTH_M = 1.8
 #: A person on a sidewalk or walking area walking (at least KERB_STAND_MPS) gets this share of the VRU margin.
 KERB_WALKING, KERB_STAND_MPS = 0.5, 0.2
-#: A person on a walkway reaching this far into the ego's lanes stands on the carriageway (:func:`on_carriageway`), m.
+#: A person on a walkway with its centre this far inside the ego's lanes stands on the carriageway (:func:`on_carriageway`), m.
 WALKWAY_INTO_LANE_M = 0.5
 #: ... its motion is read from the radar only within acos(this) = 60 degrees of the traffic's direction.
 KERB_MIN_COS = 0.5
@@ -125,14 +125,14 @@ def _weight(vru, kerb, vel) -> np.ndarray:
     return np.where(vru, np.where(kerb, np.where(walking, KERB_WALKING, 0.0), 1.0), 0.0)
 
 
-def on_carriageway(share, kerb, d, half, lo, hi) -> tuple[np.ndarray, np.ndarray]:
-    """(share, kerb), (N,) each: a person on a walkway whose body (centre ``d``, half its extent across the road
-    ``half``) reaches :data:`WALKWAY_INTO_LANE_M` or more into the ego's lanes (``lo``..``hi`` at its place; a
-    junction's walking area laid over an internal lane) stands on the carriageway: the full margin (share 1), not
-    behind the kerb. SUMO puts people waiting at a corner up to 0.2 m into the lane: they stay at the kerb."""
-    d, half = np.asarray(d, float), np.asarray(half, float)
-    deep = np.asarray(kerb, bool) & (d + half > np.asarray(lo) + WALKWAY_INTO_LANE_M) & (
-        d - half < np.asarray(hi) - WALKWAY_INTO_LANE_M)
+def on_carriageway(share, kerb, d, lo, hi) -> tuple[np.ndarray, np.ndarray]:
+    """(share, kerb), (N,) each: a person on a walkway whose centre (``d`` across the road) lies
+    :data:`WALKWAY_INTO_LANE_M` or more inside the ego's lanes (``lo``..``hi`` at its place; a junction's walking
+    area laid over an internal lane) stands on the carriageway: the full margin (share 1), not behind the kerb.
+    SUMO puts people waiting at a corner up to 0.2 m into the lane (their centres at the lane's edge), and a radar
+    places them within a few tenths of a metre: they stay at the kerb."""
+    d = np.asarray(d, float)
+    deep = np.asarray(kerb, bool) & (d > np.asarray(lo) + WALKWAY_INTO_LANE_M) & (d < np.asarray(hi) - WALKWAY_INTO_LANE_M)
     return np.where(deep, 1.0, np.asarray(share, float)), np.asarray(kerb, bool) & ~deep
 
 

@@ -92,17 +92,16 @@ def test_a_car_return_in_a_lane_of_the_map_is_a_box_along_that_lane():
 
 
 def test_a_person_on_a_walkway_deep_in_the_ego_lanes_stands_on_the_carriageway():
-    """perception.on_carriageway: lanes -1.6..1.6 across the road; a person's body half 0.24 m across it."""
+    """perception.on_carriageway: lanes -1.6..1.6 across the road."""
     from sumo_avoid.sensing.perception import on_carriageway
-    # on a walking area over the lane (centre 0.3), at a corner 0.2 m into it (centre 1.6 + 0.24 - 0.2),
-    # just 0.5 m in (1.6 + 0.24 - 0.5 = 1.34: not more than 0.5), 0.6 m in (1.24), a person on the carriageway,
-    # a car (share 0, not a person on a walkway)
+    # centres: on a walking area over the lane (0.3), at a corner with its body 0.2 m into the lane (1.64), a radar
+    # return of it 0.3 m further in (1.34), 0.6 m in (1.0), a person on the carriageway, a car (share 0, no walkway)
     share = [0.5, 0.0, 0.0, 0.0, 1.0, 0.0]
     kerb = [True, True, True, True, False, False]
-    d = [0.3, 1.64, 1.34, 1.24, 0.0, 0.0]
-    got_share, got_kerb = on_carriageway(share, kerb, d, 0.24, -1.6, 1.6)
+    d = [0.3, 1.64, 1.34, 1.0, 0.0, 0.0]
+    got_share, got_kerb = on_carriageway(share, kerb, d, -1.6, 1.6)
     assert got_share.tolist() == [1.0, 0.0, 0.0, 1.0, 1.0, 0.0]
     assert got_kerb.tolist() == [False, True, True, False, False, False]
     # the same on the lanes' other side
-    got_share, _ = on_carriageway([0.0, 0.0], [True, True], [-1.34, -1.24], 0.24, -1.6, 1.6)
+    got_share, _ = on_carriageway([0.0, 0.0], [True, True], [-1.34, -1.0], -1.6, 1.6)
     assert got_share.tolist() == [0.0, 1.0]
