@@ -12,7 +12,8 @@ from sumo_avoid.studies import ledger
 from sumo_avoid.studies.baseline import BASELINE, with_travel_time_ratio
 
 RUN_COLUMNS = ["scenario", "controller", "sensor", "seed", "status", "goal_reached", "time_to_goal_s", "travel_time_ratio",
-               "collisions", "sumo_ego_collisions", "vru_collisions", "red_light_violations", "yield_violations",
+               "collisions", "sumo_ego_collisions", "vru_collisions", "collisions_ego_stopped", "collisions_other_jumped",
+               "max_impact_speed_mps", "red_light_violations", "yield_violations",
                "stop_sign_violations", "crossing_violations", "off_road_m", "forbidden_lane_m", "wrong_way_m", "speeding_m",
                "phi_wall", "min_gap_m", "min_gap_vru_m", "sumo_collisions", "sim_time_s", "wall_s", "code", "error"]
 HEAD = ("| scenario | controller | sensor | seeds | goal | collisions (ours / SUMO's with the ego) | vru_collisions "
