@@ -17,9 +17,9 @@ ego the party that is an ego (for two egos, ``a``) and the other the other party
 * ``other_jumped``: within :data:`JUMP_WINDOW_S` before the contact, the other party was not where its motion
   could have brought it: over a recorded step it moved farther than its recorded speeds allow (the larger of
   the two, times the interval) plus :data:`JUMP_SLACK_M`, or it was not recorded a step before (it appeared,
-  or reappeared). SUMO moves
-  people across a junction without walking areas in one step (a pedestrian 15.7 m on, onto a car standing
-  at the stop line: the unseen Lyon net, reports/cities), and inserts vehicles where they depart.
+  or reappeared). SUMO moves people across a junction without walking areas in one step (a pedestrian 15.7 m
+  on, onto a car standing at the stop line: the unseen Lyon net, reports/cities), and inserts vehicles where
+  they depart.
 
 Nothing here removes a contact from a count: ``collisions`` and ``vru_collisions`` count every one; these
 fields say how each happened.
@@ -73,7 +73,8 @@ def _one(e: pd.DataFrame, o: pd.DataFrame, step: int, person: bool, start: int) 
     er, orow = e.loc[step], o.loc[step]
     v_e, v_o = np.array([er["vx"], er["vy"]], float), np.array([orow["vx"], orow["vy"]], float)
     impact = float(np.hypot(*(v_e - v_o)))
-    return (float(er["speed"]), float(orow["speed"]), impact, _kind(er, orow, person), _jumped(o, step, float(er["time_s"]), start))
+    return (float(er["speed"]), float(orow["speed"]), impact, _kind(er, orow, person),
+            _jumped(o, step, float(er["time_s"]), start))
 
 
 def _kind(er, orow, person: bool) -> str:

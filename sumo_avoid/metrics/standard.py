@@ -116,15 +116,16 @@ class Collisions(Metric):
 
 def contact_counts(events: pd.DataFrame, prefix: str = "collisions", mask=None) -> dict:
     """How the contacts happened, counted (metrics.contacts): with the ego standing, with the other party arriving
-    by a jump, and the largest impact speed (None without a contact)."""
+    by a jump, and the largest impact speed (None without a contact); ``prefix`` "vru_collisions" for the
+    ``mask``ed ones with a vulnerable road user."""
     ev = events if mask is None else events[mask]
     if "kind" not in ev:
         ev = ev.assign(kind=pd.Series(dtype=object), other_jumped=pd.Series(dtype=bool),
                        impact_speed_mps=pd.Series(dtype=float))
-    counts = {f"{prefix}_ego_stopped": int((ev["kind"] == "ego_stopped").sum()),
-              f"{prefix}_other_jumped": int(ev["other_jumped"].astype(bool).sum())}
     impact = ev["impact_speed_mps"].astype(float)
-    return {**counts, "max_impact_speed_" + ("vru_" if prefix != "collisions" else "") + "mps":
+    return {f"{prefix}_ego_stopped": int((ev["kind"] == "ego_stopped").sum()),
+            f"{prefix}_other_jumped": int(ev["other_jumped"].astype(bool).sum()),
+            "max_impact_speed_vru_mps" if prefix.startswith("vru") else "max_impact_speed_mps":
             float(impact.max()) if len(impact) else None}
 
 
@@ -229,7 +230,8 @@ class VulnerableRoadUsers(Metric):
         ev = all_collision_events(run)
         is_vru = ev["other_class"].isin(vru.VRU_CLASSES) if "other_class" in ev else pd.Series(False, index=ev.index)
         gap = vru.min_gap_vru_m(person_pairs(run), vru.cyclist_gaps(run.traj, run.classes, road_apart(run)))
-        return {"vru_collisions": int(is_vru.sum()), **contact_counts(ev, "vru_collisions", is_vru), "min_gap_vru_m": gap}
+        return {"vru_collisions": int(is_vru.sum()), **contact_counts(ev, "vru_collisions", is_vru),
+                "min_gap_vru_m": gap}
 
 
 class MinGap(Metric):

@@ -20,7 +20,8 @@ ASSUMED_LENGTH_M = 4.5
 ASSUMED_WIDTH_M = 1.8
 #: A person on a sidewalk or walking area walking (at least KERB_STAND_MPS) gets this share of the VRU margin.
 KERB_WALKING, KERB_STAND_MPS = 0.5, 0.2
-#: A person on a walkway with its centre this far inside the ego's lanes stands on the carriageway (:func:`on_carriageway`), m.
+#: A person on a walkway with its centre this far inside the ego's lanes stands on the carriageway
+#: (:func:`on_carriageway`), m.
 WALKWAY_INTO_LANE_M = 0.5
 #: ... its motion is read from the radar only within acos(this) = 60 degrees of the traffic's direction.
 KERB_MIN_COS = 0.5
@@ -132,7 +133,8 @@ def on_carriageway(share, kerb, d, lo, hi) -> tuple[np.ndarray, np.ndarray]:
     SUMO puts people waiting at a corner up to 0.2 m into the lane (their centres at the lane's edge), and a radar
     places them within a few tenths of a metre: they stay at the kerb."""
     d = np.asarray(d, float)
-    deep = np.asarray(kerb, bool) & (d > np.asarray(lo) + WALKWAY_INTO_LANE_M) & (d < np.asarray(hi) - WALKWAY_INTO_LANE_M)
+    inside = (d > np.asarray(lo) + WALKWAY_INTO_LANE_M) & (d < np.asarray(hi) - WALKWAY_INTO_LANE_M)
+    deep = np.asarray(kerb, bool) & inside
     return np.where(deep, 1.0, np.asarray(share, float)), np.asarray(kerb, bool) & ~deep
 
 
