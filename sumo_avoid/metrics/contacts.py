@@ -37,7 +37,6 @@ STOPPED_MPS = 0.05  # nuPlan's stopped_speed_threshold, m/s
 REAR_DEG = 150.0  # nuPlan's is_agent_behind angle tolerance, degrees
 JUMP_SLACK_M = 1.0  # beyond the distance its speeds allow, m
 JUMP_WINDOW_S = 1.0  # a jump this long before the contact counts, s
-KINDS = ("ego_stopped", "other_stopped", "rear", "front", "lateral")
 FIELDS = ["ego", "ego_speed_mps", "other_speed_mps", "impact_speed_mps", "kind", "other_jumped"]
 _COLS = ["step", "time_s", "id", "x", "y", "vx", "vy", "speed", "heading", "length", "width"]
 

@@ -149,10 +149,11 @@ def all_collision_events(run: RunResult):
         ev = ev.sort_values(["step", "a", "b"], kind="stable").reset_index(drop=True)
         with_person = ev.pop("_person").to_numpy(bool)
         egos = set(run.traj.loc[run.traj["is_ego"].astype(bool), "id"].astype(str)) if len(run.traj) else set()
+        ev = contacts.describe(ev, run.traj, run.persons, egos, with_person)  # how each happened, and who the ego is
         if run.classes:  # a run recorded with classes (every run since persons are recorded)
-            other = [b if a in egos else a for a, b in zip(ev["a"].astype(str), ev["b"].astype(str))]
+            other = np.where(ev["ego"].astype(str) == ev["a"].astype(str), ev["b"].astype(str), ev["a"].astype(str))
             ev = ev.assign(other_class=[run.classes.get(o, "") for o in other])
-        return contacts.describe(ev, run.traj, run.persons, egos, with_person)  # how each happened
+        return ev
     return run.memo("collision_events", compute)
 
 
