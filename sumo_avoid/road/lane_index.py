@@ -41,6 +41,7 @@ class LaneIndex:
                     junctions.append(jp)
         self.ids = tuple(ids)
         self._lines = np.array(lines, dtype=object)
+        self._polys = np.array(polys, dtype=object)
         self._tree = shapely.STRtree(polys)
         self._junctions = shapely.unary_union(junctions) if junctions else shapely.Polygon()
         shapely.prepare(self._junctions)
@@ -78,6 +79,19 @@ class LaneIndex:
         if not len(pts) or not len(self._lines):
             return np.zeros(0, np.int64), np.zeros(0, np.int64)
         return self._tree.query(shapely.points(pts), predicate="intersects")
+
+    def crossing(self, geoms) -> tuple[np.ndarray, np.ndarray]:
+        """Shapely geometries (segments) -> every (geometry, lane) pair that intersects: (K,), (K,)."""
+        return self._tree.query(geoms, predicate="intersects")
+
+    def polygon(self, q: int):
+        """The polygon of lane :attr:`ids` [q]."""
+        return self._polys[q]
+
+    def direction(self, q: int, point) -> np.ndarray:
+        """(2,) unit direction of lane :attr:`ids` [q]'s centre line where ``point`` projects on it."""
+        return self._directions(shapely.points(np.asarray(point, float).reshape(1, 2)), np.zeros(1, np.int64),
+                                np.array([q]))[0]
 
     def _directions(self, geoms, p, q) -> np.ndarray:
         """(K,2) unit direction of lane q[k]'s centre line where point geoms[p[k]] projects on it."""

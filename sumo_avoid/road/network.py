@@ -27,6 +27,7 @@ from shapely.geometry import LineString, MultiPolygon, Polygon
 
 from sumo_avoid.road.elements import read_elements
 from sumo_avoid.road.grade import apart_parts
+from sumo_avoid.road.overlaps import oncoming_narrowing
 from sumo_avoid.road.lane_index import LaneIndex
 from sumo_avoid.road.polyline import polyline_length, polyline_point_at, polyline_project
 from sumo_avoid.road.right_of_way import RightOfWay
@@ -283,9 +284,9 @@ class Road:
               vclass: str | None = None) -> RoutePlan:
         """The route along consecutive normal edges (:meth:`RoutePlanner.route`)."""
         plan = self.planner.route(edge_ids, depart_lane, arrival_lane, vclass)
-        if not self.elements.walkways:
-            return plan
-        return plan._replace(lanes=kerb_room(plan, self.on_walkway))
+        if self.elements.walkways:
+            plan = plan._replace(lanes=kerb_room(plan, self.on_walkway))
+        return plan._replace(lanes=oncoming_narrowing(plan, self.lanes, self._net.getLane, self.apart, vclass))
 
     def without_uturns(self, edge_ids, vclass: str | None):
         """The fastest route round the U-turns of route ``edge_ids``, or None (:mod:`sumo_avoid.road.uturns`)."""

@@ -37,6 +37,16 @@ def polyline_point_at(path, s_m: float) -> np.ndarray:
     return np.array([np.interp(s, cum, p[:, 0]), np.interp(s, cum, p[:, 1])])
 
 
+def path_frames(path, cum, s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Points, unit tangents (the chord from s - 0.25 m to s + 0.25 m) and unit left normals, each (N,2), of
+    polyline ``path`` (with arc lengths ``cum``) at arc lengths ``s``."""
+    def at(x):
+        return np.column_stack([np.interp(x, cum, path[:, 0]), np.interp(x, cum, path[:, 1])])
+    tan = at(s + 0.25) - at(s - 0.25)
+    tan /= np.maximum(np.hypot(tan[:, 0], tan[:, 1]), 1e-9)[:, None]
+    return at(s), tan, np.column_stack([-tan[:, 1], tan[:, 0]])
+
+
 def polyline_project(path, point) -> float:
     """Arc length of the point of the polyline nearest to ``point`` (m)."""
     p = _as_path(path)

@@ -106,6 +106,10 @@ class LanePiece:
     #: walking area (within the walkway tolerance), the most the corridor may widen there, m; inf = no
     #: walkway near (and on normal edges)
     kerb_room_m: tuple[float, float] = (float("inf"), float("inf"))
+    #: on a normal edge: (s, right, left) at sampled arc lengths, how far the corridor's right and left borders
+    #: move in where an oncoming lane of another edge overlaps the ego's lanes (:mod:`~sumo_avoid.road.overlaps`),
+    #: m; () = none
+    narrowing_m: tuple[tuple[float, float, float], ...] = ()
 
     def usable(self) -> np.ndarray:
         """(lanes,) bool: the lanes the ego may use (its own lane always)."""

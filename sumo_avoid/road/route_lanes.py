@@ -8,7 +8,9 @@ The corridor holds the lanes of the ego's direction only: a two-way road's centr
 edge of the road are its bounds, and inside a junction the internal lane the route takes, widened
 by ``JUNCTION_MARGIN_M`` on each side (a junction is open tarmac; a turning car's corners sweep
 past its lane's width) with ramps of ``JUNCTION_RAMP_M`` at its entry and exit, but never over the
-kerb of a sidewalk or walking area (:attr:`LanePiece.kerb_room_m`: people walk there). Lanes that do not
+kerb of a sidewalk or walking area (:attr:`LanePiece.kerb_room_m`: people walk there); where the net lays an
+oncoming lane of another edge over the ego's lanes, the corridor ends at that lane's border
+(:attr:`LanePiece.narrowing_m`, :mod:`~sumo_avoid.road.overlaps`). Lanes that do not
 continue the route end in a taper over the last ``TAPER_M`` before the junction (at most half the
 edge), so the bound leads the car into the lane that continues instead of ending in a step.
 The corridor is piecewise linear in s (breakpoints, ``np.interp``).
@@ -71,6 +73,7 @@ class RouteLanes:
         opp = [(q.s_start_m, q.s_end_m, 0.0 if _is_internal(q) or q.opposite_right else q.opposite_m) for q in self.pieces]
         self._opp_s = np.maximum.accumulate(np.array([x for a, b, _ in opp for x in (a, b)]) + _EPS * np.arange(2 * n))
         self._opp_w = np.array([w for _, _, w in opp for _ in (0, 1)])
+        self._narrow = _narrowing(self.pieces)
 
     def opposite(self, s) -> np.ndarray:
         """(N,) width of the oncoming lane beside the ego's lanes (on their left) at arc lengths s that an
@@ -81,7 +84,11 @@ class RouteLanes:
         """(d_lo (N,), d_hi (N,)): the right and left bounds of the ego's lanes at arc lengths s, m."""
         s = np.atleast_1d(np.asarray(s, float))
         m_lo, m_hi = self.widening(s)
-        return np.interp(s, self._s, self._lo) - m_lo, np.interp(s, self._s, self._hi) + m_hi
+        lo, hi = np.interp(s, self._s, self._lo) - m_lo, np.interp(s, self._s, self._hi) + m_hi
+        if self._narrow is None:
+            return lo, hi
+        at, right, left = self._narrow
+        return lo + np.interp(s, at, right), hi - np.interp(s, at, left)
 
     def widening(self, s) -> tuple[np.ndarray, np.ndarray]:
         """(right (N,), left (N,)): how far the corridor at arc lengths s is widened beyond the lanes on
@@ -124,6 +131,18 @@ class RouteLanes:
         p = self.pieces[self._index(s)]
         f = 0.0 if p.s_end_m - p.s_start_m <= _EPS else min(max((s - p.s_start_m) / (p.s_end_m - p.s_start_m), 0.0), 1.0)
         return p, (1.0 - f) * np.asarray(p.offsets_start_m) + f * np.asarray(p.offsets_end_m)
+
+
+def _narrowing(pieces) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Breakpoints (s, right, left) of how far oncoming lanes of other edges move the corridor's borders in
+    (:attr:`LanePiece.narrowing_m`, 0 on the other pieces), or None when no piece has any."""
+    if not any(p.narrowing_m for p in pieces):
+        return None
+    pts = []
+    for p in pieces:
+        pts += list(p.narrowing_m) or [(p.s_start_m, 0.0, 0.0), (p.s_end_m, 0.0, 0.0)]
+    s = np.maximum.accumulate(np.array([q[0] for q in pts]) + _EPS * np.arange(len(pts)))
+    return s, np.array([q[1] for q in pts]), np.array([q[2] for q in pts])
 
 
 def _junction_widening(pieces) -> tuple[np.ndarray, np.ndarray]:

@@ -10,7 +10,7 @@ from typing import NamedTuple
 import numpy as np
 
 from sumo_avoid.road.crossings import crossing_links
-from sumo_avoid.road.polyline import _cumlen, polyline_length, polyline_point_at, cut_spurs, ease_jogs
+from sumo_avoid.road.polyline import _cumlen, path_frames, polyline_length, polyline_point_at, cut_spurs, ease_jogs
 from sumo_avoid.road.right_of_way import RightOfWay, link_state
 from sumo_avoid.road.route import LanePiece, OncomingLane, RouteLink
 
@@ -72,12 +72,7 @@ def kerb_room(plan: RoutePlan, on_walkway, reach_m: float = KERB_REACH_M, step_m
             out.append(p)
             continue
         s = np.linspace(p.s_start_m, p.s_end_m, max(int((p.s_end_m - p.s_start_m) / step_m) + 2, 2))
-        pts = np.column_stack([np.interp(s, cum, path[:, 0]), np.interp(s, cum, path[:, 1])])
-        ahead = np.column_stack([np.interp(s + 0.25, cum, path[:, 0]), np.interp(s + 0.25, cum, path[:, 1])])
-        behind = np.column_stack([np.interp(s - 0.25, cum, path[:, 0]), np.interp(s - 0.25, cum, path[:, 1])])
-        tan = ahead - behind
-        tan /= np.maximum(np.hypot(tan[:, 0], tan[:, 1]), 1e-9)[:, None]
-        left = np.column_stack([-tan[:, 1], tan[:, 0]])
+        pts, _, left = path_frames(path, cum, s)
         half = 0.5 * p.widths_m[p.lane if len(p.widths_m) > p.lane else 0]  # an internal piece lists its own lane only
         room = []
         for side in (-1.0, 1.0):  # right, left
