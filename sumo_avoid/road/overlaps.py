@@ -17,7 +17,10 @@ SUMO's bidirectional tram tracks in a street), lies on the ego's level (z within
 :data:`~sumo_avoid.core.levels.LEVELS`, and not on an edge that crosses the ego's without a junction:
 :mod:`~sumo_avoid.road.grade`) and reaches more than ``MIN_OVERLAP_M`` over the corridor's left or right
 border; the corridor's border is moved back to that lane's border there (:attr:`LanePiece.narrowing_m`), but
-never so far that less than ``MIN_ROOM_M`` of the corridor stays. A two-way street's own opposite edge borders
+never closer than ``MIN_HALF_ROOM_M`` to the centre of the lane the route follows: the ego keeps to its lane
+rather than moving over into the next one, where SUMO's cars, which place it in its lane, pass it close (the
+first version kept 2.4 m of the whole corridor: on Am Heumarkt the ego then drove 1 m right of its lane's
+centre, and a car passing in the right lane clipped its rear). A two-way street's own opposite edge borders
 the ego's lanes without overlapping them, so nothing changes there; lanes running the ego's way (a slip road
 beside it) are other cars going its way, met as obstacles as before.
 """
@@ -38,8 +41,9 @@ SAMPLE_M = 2.0
 MIN_OVERLAP_M = 0.1
 #: A lane counts as oncoming when its direction is more than this from the route's, degrees.
 ANTIPARALLEL_DEG = 150.0
-#: The narrowed corridor keeps at least this much room across (a car's 1.8 m and 0.3 m each side), m.
-MIN_ROOM_M = 2.4
+#: The narrowed corridor keeps at least this much room on each side of the centre of the lane the route follows
+#: (half a car's 1.8 m and 0.3 m): the ego may always drive its lane's centre, as SUMO's cars do, m.
+MIN_HALF_ROOM_M = 1.2
 
 
 def _z_at(shape3d: np.ndarray, point: np.ndarray) -> float:
@@ -72,9 +76,12 @@ def oncoming_narrowing(plan, index, lane_of, apart, vclass: str | None) -> tuple
         if cut is None:
             out.append(p)
             continue
-        room = bounds[:, 1] - bounds[:, 0]
-        scale = np.clip((room - MIN_ROOM_M) / np.maximum(cut.sum(axis=1), 1e-12), 0.0, 1.0)
-        cut = cut * scale[:, None]
+        centre = offs[:, p.lane]
+        cut[:, 0] = np.minimum(cut[:, 0], np.maximum(centre - MIN_HALF_ROOM_M - bounds[:, 0], 0.0))
+        cut[:, 1] = np.minimum(cut[:, 1], np.maximum(bounds[:, 1] - centre - MIN_HALF_ROOM_M, 0.0))
+        if not cut.any():
+            out.append(p)
+            continue
         out.append(replace(p, narrowing_m=tuple((float(x), float(r), float(q)) for x, (r, q) in zip(s, cut))))
     return tuple(out)
 

@@ -12,7 +12,7 @@ import pytest
 import sumo
 
 from sumo_avoid.road import network
-from sumo_avoid.road.overlaps import MIN_ROOM_M
+from sumo_avoid.road.overlaps import MIN_HALF_ROOM_M
 from sumo_avoid.road.route_lanes import RouteLanes
 
 pytestmark = pytest.mark.sumo
@@ -45,7 +45,7 @@ def _left_cut(net) -> tuple[np.ndarray, np.ndarray, RouteLanes]:
     return s, lanes.corridor(s)[1], lanes
 
 
-@pytest.mark.parametrize("gap, cut", [(2.6, 0.6), (2.0, 3.2 - MIN_ROOM_M)], ids=["overlap_0.6", "capped"])
+@pytest.mark.parametrize("gap, cut", [(2.9, 0.3), (2.0, 1.6 - MIN_HALF_ROOM_M)], ids=["overlap_0.3", "capped"])
 def test_an_oncoming_lane_over_the_ego_s_moves_its_left_border_back(tmp_path, gap, cut):
     s, hi, lanes = _left_cut(_net(tmp_path, gap))
     np.testing.assert_allclose(hi, 1.6 - cut, atol=0.02)  # the path runs on the lane centre
