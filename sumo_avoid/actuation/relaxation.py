@@ -63,9 +63,9 @@ class RelaxationActuator(HeldSpeed):
         self._last: tuple = ((), np.zeros((0, 2)))  # the last step's egos and their velocities (rows of _vel's)
 
     @staticmethod
-    def steering(params: RelaxationParams) -> tuple[float, float]:
-        """No turning radius, no yaw-rate limit: the velocity turns freely."""
-        return 0.0, math.inf
+    def steering(params: RelaxationParams) -> tuple[float, float, float]:
+        """No turning radius, no yaw-rate limit: the velocity turns freely (about the centre)."""
+        return 0.0, math.inf, 0.0
 
     def remove_ego(self, vid: str) -> None:
         super().remove_ego(vid)

@@ -41,6 +41,7 @@ class Context:
     obstacles: tuple[np.ndarray, ...] = field(default=())  # static obstacle polygons, each (k, 2) m
     turn_radius_m: float = 0.0  # the egos' smallest turning radius (the kinematic actuator's), m; 0: none
     yaw_rate_radps: float = float("inf")  # the egos' largest yaw rate (the kinematic actuator's), rad/s
+    rear_axle_m: float = 0.0  # how far behind its centre an ego turns (the kinematic actuator's rear axle), m
     # the scenario's validated parameter tables by table name ("controllers.apf", "sensors.radar",
     # "layers.traffic", "actuators.kinematic", ...; every registered plug-in's, chosen or not): a plug-in
     # that works with another's parameters (a formation member with APF's, ground truth's radar for the

@@ -63,8 +63,8 @@ def test_each_actuator_declares_the_steering_limits_controllers_plan_with():
     from sumo_avoid.actuation import ACTUATORS
     from sumo_avoid.actuation.relaxation import RelaxationParams
 
-    assert ACTUATORS["kinematic"].factory.steering(LIM) == (5.0, 0.5)
-    assert ACTUATORS["relaxation"].factory.steering(RelaxationParams()) == (0.0, math.inf)
+    assert ACTUATORS["kinematic"].factory.steering(LIM) == (5.0, 0.5, 1.325)
+    assert ACTUATORS["relaxation"].factory.steering(RelaxationParams()) == (0.0, math.inf, 0.0)
 
 
 def test_a_stop_wish_with_a_direction_brakes_and_steers_that_way():
@@ -106,3 +106,21 @@ def test_relaxation_holds_each_egos_velocity_and_forgets_a_removed_one():
     assert not held.vel.flags.writeable
     act.remove_ego("a")  # taken out (its goal): its row is SUMO's again, b's is still held
     np.testing.assert_allclose(act.held(snap).vel, [[1.0, 0.0], [3.0, 0.0], [0.0, 3.0]])
+
+
+@pytest.mark.parametrize("axle, rear_y", [(1.325, -0.05713), (0.0, -0.16301)], ids=["rear_axle", "centre"])
+def test_the_car_turns_about_its_rear_axle(axle, rear_y):
+    # 5 m/s, asked to go left: target 5 cos 90deg = 0 -> brakes 8 * 0.1 to 4.2 m/s, mean 4.6;
+    # yaw <= min(0.8, 4/4.6, 4.6/sqrt(4.25^2 - 1.325^2) = 1.139) = 0.8 rad/s -> 0.08 rad; the axle 1.325 m behind
+    # the centre moves 0.42 m along the mid heading 0.04: centre (0.42 cos 0.04 + 1.325 (cos 0.08 - 1), 0.42 sin 0.04
+    # + 1.325 sin 0.08) = (0.415426, 0.122682). The rear bumper (2.25 m behind the centre) swings 0.057 m to the
+    # right; turning about the centre, 0.163 m
+    lim = KinematicParams(rear_axle_m=axle)
+    m = actuate([[0.0, 0.0]], [0.0], [5.0], [[0.0, 5.0]], lim, 0.1)
+    assert m.heading[0] == pytest.approx(0.08)
+    if axle:
+        assert m.pos[0] == pytest.approx([0.415426306, 0.122682490])
+    else:
+        assert m.pos[0] == pytest.approx([0.419664045, 0.016795520])
+    rear = m.pos[0] - 2.25 * np.array([math.cos(0.08), math.sin(0.08)])
+    assert rear[1] == pytest.approx(rear_y, abs=5e-5)

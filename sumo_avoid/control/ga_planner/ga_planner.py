@@ -166,6 +166,7 @@ class GaPlannerController(BaseController):
     def __init__(self, params: GaPlannerParams, ctx):
         super().__init__(params, ctx)
         self.rng = ctx.rng()
+        self.axle_m = ctx.rear_axle_m
         self.truth_points = sampled_edges(ctx.obstacles, params.map_cell_m)
         self.bounds = arena_bounds(ctx.walls, params.wall_margin_m)
         self.road = ctx.walls is None  # no arena: every ego plans in its route frame
@@ -382,7 +383,7 @@ class GaPlannerController(BaseController):
                                                    np.sin(heading + np.pi + st.reverse_turn * np.pi / 4)])
         cruise = st.task.cruise_speed_mps if st.usable else min(st.task.cruise_speed_mps, p.unusable_speed_mps)
         v = pursuit_velocity(st.path, st.s, pos, heading, cruise, lookahead, p.lat_accel_mps2, p.decel_mps2,
-                             np.radians(p.max_course_deg))
+                             np.radians(p.max_course_deg), self.axle_m)
         n = float(np.hypot(*v))
         return v * min(1.0, v_gov / n) if n > 1e-12 else v
 
