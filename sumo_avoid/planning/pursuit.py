@@ -1,9 +1,10 @@
 """Pure-pursuit path tracking: a planned polyline -> one desired velocity (m/s, world frame).
 
 The car heads for the point ``lookahead`` metres further along the path than its own projection, seen
-from the axle it turns about (``axle_m`` behind its centre, the kinematic actuator's rear axle; aimed at
-from the centre, a car turning about its rear axle cut inside each bend: seed 004's field, seeds 1-3, took
-110 / 54 / 62 s, from the axle 55 / 56 / 54 s); the kinematic actuator then turns it towards that direction within its yaw and lateral
+from the point it turns about (``axle_m`` behind its centre: the kinematic actuator's ``rear_axle_m``, 0 by
+default; aimed at from the centre, a car turning about a rear axle 1.325 m back cut inside each bend: seed
+004's field, seeds 1-3, took 110 / 54 / 62 s, from the axle 55 / 56 / 54 s, turning about the centre 35 /
+62 / 34 s); the kinematic actuator then turns it towards that direction within its yaw and lateral
 limits, which is pure pursuit's circular arc. Its speed is the smallest of the cruise speed, the speed of
 the pursuit arc (curvature 2 sin(alpha) / lookahead, alpha the angle between heading and the
 lookahead direction) at ``lat_accel_mps2``, and, for every path corner ahead, the speed from which

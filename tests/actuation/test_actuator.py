@@ -63,7 +63,7 @@ def test_each_actuator_declares_the_steering_limits_controllers_plan_with():
     from sumo_avoid.actuation import ACTUATORS
     from sumo_avoid.actuation.relaxation import RelaxationParams
 
-    assert ACTUATORS["kinematic"].factory.steering(LIM) == (5.0, 0.5, 1.325)
+    assert ACTUATORS["kinematic"].factory.steering(LIM) == (5.0, 0.5, 0.0)
     assert ACTUATORS["relaxation"].factory.steering(RelaxationParams()) == (0.0, math.inf, 0.0)
 
 

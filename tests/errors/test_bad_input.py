@@ -91,6 +91,7 @@ CASES: dict[str, Case] = {
     "val_layers_unknown": scenario(base("[layers.hope]\nx = 1"), "layers.hope"),
     "val_actuators_unknown": scenario(base("[actuators.teleport]\nx = 1"), "actuators.teleport"),
     "val_radar_fov": scenario(base("[sensors.radar]\nfov_deg = 270.0"), "sensors.radar"),
+    "val_rear_axle_beyond_radius": scenario(base("[actuators.kinematic]\nrear_axle_m = 5.0"), "actuators.kinematic"),
     "val_relaxation_tau_zero": scenario(base("[actuators.relaxation]\ntau_s = 0.0"), "actuators.relaxation.tau_s"),
     "val_danger_time_levels": scenario(base("[layers.danger_time]\nbrake_s = 9.0"), "layers.danger_time"),
     # --- keys of the earlier layout: one line naming the new key --------------------------------
