@@ -72,7 +72,8 @@ def oncoming_narrowing(plan, index, lane_of, apart, vclass: str | None) -> tuple
         offs = (1.0 - f)[:, None] * np.asarray(p.offsets_start_m) + f[:, None] * np.asarray(p.offsets_end_m)
         ok = p.usable()
         bounds = np.array([lane_bounds(o, p.widths_m, ok) for o in offs])  # (n, 2) right, left
-        cut = _cuts(p, pts, tan, left, bounds, index, lane_of, apart.get(p.edge, frozenset()), cos_max, vclass or "passenger")
+        cut = _cuts(p, pts, tan, left, bounds, index, lane_of, apart.get(p.edge, frozenset()), cos_max,
+                    vclass or "passenger")
         if cut is None:
             out.append(p)
             continue
