@@ -61,6 +61,15 @@ def test_pursuit_aims_at_the_lookahead_point_at_the_arc_speed():
     assert v / np.hypot(*v) == pytest.approx(np.array([5.0, -1.0]) / math.sqrt(26))
 
 
+def test_pursuit_steers_the_axle_the_car_turns_about():
+    # a car turning about a rear axle 1.325 m behind its centre (0, 1): the axle at (-1.325, 1) aims at the point
+    # 5 + 1.325 m ahead of the centre's projection, (6.325, 0): direction (7.65, -1)
+    path = np.array([[0.0, 0.0], [100.0, 0.0]])
+    v = pursuit_velocity(path, 0.0, [0.0, 1.0], 0.0, cruise_mps=10.0, lookahead_m=5.0, lat_accel_mps2=2.0,
+                         decel_mps2=3.0, axle_m=1.325)
+    assert v / np.hypot(*v) == pytest.approx(np.array([7.65, -1.0]) / math.hypot(7.65, 1.0))
+
+
 def test_pursuit_brakes_for_a_corner_ahead():
     path = np.array([[0.0, 0.0], [20.0, 0.0], [20.0, 20.0]])
     assert corner_angles(path) == pytest.approx([math.pi / 2])
