@@ -93,8 +93,7 @@ def actuate(pos, heading, speed, v_des, limits: KinematicParams, dt_s: float) ->
         yaw_lat = np.where(v_abs > 1e-9, limits.max_lat_accel_mps2 / v_abs, np.inf)
     b = limits.rear_axle_m
     # the radius the turning point may take: R_min, or the axle's radius that puts the centre on R_min
-    r_min = limits.min_turn_radius_m
-    r_turn = max(r_min, 1e-9) if b == 0.0 else np.sqrt(max(r_min ** 2 - b * b, 1e-18))
+    r_turn = np.sqrt(max(limits.min_turn_radius_m ** 2 - b * b, 1e-18))
     yaw_max = np.minimum.reduce([np.full_like(v_abs, limits.max_yaw_rate_radps), yaw_lat, v_abs / r_turn])
     dtheta = np.clip(err_used, -yaw_max * dt_s, yaw_max * dt_s)
     new_heading = wrap_angle(heading + dtheta)

@@ -84,8 +84,8 @@ class LaneIndex:
         """Shapely geometries (segments) -> every (geometry, lane) pair that intersects: (K,), (K,)."""
         return self._tree.query(geoms, predicate="intersects")
 
-    def polygon(self, q: int):
-        """The polygon of lane :attr:`ids` [q]."""
+    def polygon(self, q):
+        """The polygon of lane :attr:`ids` [q] (an array of them for an array of indices)."""
         return self._polys[q]
 
     def direction(self, q: int, point) -> np.ndarray:

@@ -27,8 +27,8 @@ from shapely.geometry import LineString, MultiPolygon, Polygon
 
 from sumo_avoid.road.elements import read_elements
 from sumo_avoid.road.grade import apart_parts
-from sumo_avoid.road.overlaps import oncoming_narrowing
 from sumo_avoid.road.lane_index import LaneIndex
+from sumo_avoid.road.overlaps import oncoming_narrowing
 from sumo_avoid.road.polyline import polyline_length, polyline_point_at, polyline_project
 from sumo_avoid.road.right_of_way import RightOfWay
 from sumo_avoid.road.route_plan import RoutePlan, RoutePlanner, kerb_room

@@ -97,13 +97,14 @@ def _cuts(p, pts, tan, left, bounds, index, lane_of, apart_edges, cos_max, vclas
     own = lane_of(f"{p.edge}_{p.lane}").getEdge()
     ends = {own.getFromNode().getID(), own.getToNode().getID()}
     own_shape = np.asarray(own.getLanes()[p.lane].getShape3D(), float)
-    for i, j in zip(k.tolist(), q.tolist()):
+    parts = shapely.intersection(segs[k], index.polygon(q))
+    for i, j, inter in zip(k.tolist(), q.tolist(), parts):
         lane = lane_of(index.ids[j])
         edge = lane.getEdge()
         if (edge.getID() == p.edge or edge.getID() in apart_edges or not lane.allows(vclass)
                 or {edge.getFromNode().getID(), edge.getToNode().getID()} == ends):
             continue
-        part = shapely.get_coordinates(shapely.intersection(segs[i], index.polygon(j)))
+        part = shapely.get_coordinates(inter)
         if not len(part):
             continue
         d = (part - pts[i]) @ left[i]
