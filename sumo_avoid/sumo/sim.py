@@ -98,8 +98,7 @@ class SumoStartError(RuntimeError):
 
 
 class SumoStepError(RuntimeError):
-    """SUMO stopped on the scenario's input during a step (e.g. a vehicle's invalid departLane,
-    found only when SUMO inserts it)."""
+    """SUMO stopped on the scenario's input in a step (e.g. an invalid departLane, found only at insertion)."""
 
 
 class SumoSim:
@@ -134,6 +133,7 @@ class SumoSim:
         self._static: tuple = ()
         self._subscribe_new(libsumo.vehicle.getIDList())
         self._subscribe_persons(libsumo.person.getIDList())
+        self._stepped = False  # libsumo keeps a previous run's subscription results until the first step
         for tls in libsumo.trafficlight.getIDList():  # every signal's state, read with the vehicles
             libsumo.trafficlight.subscribe(tls, [libsumo.constants.TL_RED_YELLOW_GREEN_STATE])
 
@@ -206,8 +206,8 @@ class SumoSim:
                         lane_pos=lane_pos, vclass=vclass, is_person=person, z=z, apart=self.apart)
 
     def _read_persons(self):
-        """The persons outside vehicles: ids, centres, velocities, headings, (length, width), lanes, lane
-        positions, heights; None when there are none. SUMO's person position is taken as the front, like a vehicle's."""
+        """Persons outside vehicles: ids, centres, velocities, headings, (length, width), lanes, lane positions,
+        heights; None when there are none. A person's SUMO position is its front, like a vehicle's."""
         c = libsumo.constants
         res = libsumo.person.getAllSubscriptionResults()
         rows = [(pid, r) for pid, r in res.items() if pid in self._persons and not r[c.VAR_VEHICLE]]
@@ -233,10 +233,9 @@ class SumoSim:
                 np.where([bool(x) for x in lane], flat[:, 4], np.nan), z)
 
     def _finite(self, flat, ids, is_ego=False) -> np.ndarray | None:
-        """None when every row of ``flat`` (x, y, z, angle, ...) has a finite position and angle, else which
-        to keep: SUMO gave a person on a walking area a NaN position for a step (unseen Sao Paulo district,
-        striping model); such a road user is left out of that step's snapshot, noted once in SUMO's log (an
-        ego is kept: its pose is the plug-in's own). ``ids`` is read only then."""
+        """None when every row of ``flat`` (x, y, z, angle, ...) has a finite pose, else which to keep: SUMO gave
+        a person on a walking area a NaN position for a step (unseen Sao Paulo, striping model); such a road user
+        is left out of that step, noted once in SUMO's log (an ego is kept). ``ids`` is read only then."""
         ok = np.isfinite(flat[:, [0, 1, 3]]).all(axis=1) | is_ego
         if ok.all():
             return None
@@ -246,10 +245,10 @@ class SumoSim:
                 self.note(f"sumo-avoid: {vid} has no finite position at {self.time_s:.2f} s; left out of the steps where SUMO gives none")
         return ok
 
-    @staticmethod
-    def _signals() -> dict[str, str]:
+    def _signals(self) -> dict[str, str]:
+        """Every signal's state; none before the first step, where libsumo's results are still a previous run's."""
         state = libsumo.constants.TL_RED_YELLOW_GREEN_STATE
-        return {tls: r[state] for tls, r in libsumo.trafficlight.getAllSubscriptionResults().items()}
+        return {tls: r[state] for tls, r in libsumo.trafficlight.getAllSubscriptionResults().items()} if self._stepped else {}
 
     @property
     def time_s(self) -> float:
@@ -344,6 +343,7 @@ class SumoSim:
     def step(self) -> list[SumoCollision]:
         try:
             libsumo.simulationStep()
+            self._stepped = True
         except (libsumo.TraCIException, libsumo.FatalTraCIError) as e:
             raise SumoStepError(" ".join(str(e).split())) from None
         arrived = libsumo.simulation.getSubscriptionResults()[libsumo.constants.VAR_ARRIVED_VEHICLES_IDS]

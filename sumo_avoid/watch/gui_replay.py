@@ -97,6 +97,8 @@ def replay(rec: Recording, spec: ReplaySpec, work: pathlib.Path) -> dict:
         _setup(con, rec)
         present: dict = {}
         signals = rec.signals.sort_values("time_s") if rec.signals is not None else None
+        if signals is not None:  # only the net's own (recordings before 2026-11-29 could hold a previous run's)
+            signals = signals[signals["tls"].astype(str).isin(con.trafficlight.getIDList())]
         by_time = {round(t, 6): g for t, g in rows.groupby(rows["time_s"].round(6))}
         shot_t = None if spec.screenshot is None else shown[np.argmin(np.abs(shown - (spec.screenshot_at_s or t0)))]
         for t in shown:
