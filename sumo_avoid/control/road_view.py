@@ -317,11 +317,14 @@ class RoadView:
             # walkway with its centre well inside the ego's lanes is on the carriageway (unseen 2242: a person crossing
             # the ego's left turn on a walking area over its internal lane, walking away from the side the ego had
             # drifted to, was passed at its size; the ego, pushed back from the lane's edge, hit it at 2.4 m/s); one
-            # walking on a walkway that reaches into them keeps its share walking along (bologna_bus_lane, radar, seed 7:
-            # a person walking towards the ego on a walking area over its lane, 0.3 m clear, stepped into its path at 10 m)
+            # walking in a junction on a walking area that reaches into them keeps its share walking along (bologna_bus_lane,
+            # radar, seed 7: a person walking towards the ego over its internal lane, 0.3 m clear, stepped into its path at
+            # 10 m); beside a street's lanes the kerb stays a kerb (bologna_signals, radar, seed 8: people on the sidewalk,
+            # placed by the radar up to half a metre in, pushed the ego about and it touched a car standing beside it)
             vs, vd = self.frame.velocity_to_frenet(os_, od, o_vel)
             share, kerb = on_carriageway(np.asarray(vru, float)[keep], kerb, od, lo_k, hi_k)
-            grow = 2.0 * vru_margin_m * towards_path(share, vd * np.sign(d_raw - od), in_lanes(od, half, lo_k, hi_k))
+            open_ = in_lanes(od, half, lo_k, hi_k) & (self.lanes.internal(os_) if self.lanes is not None else False)
+            grow = 2.0 * vru_margin_m * towards_path(share, vd * np.sign(d_raw - od), open_)
             o_len, o_wid = o_len + grow, o_wid + grow
             od, o_rel, o_vel = self._from_line(os_, od, o_rel, np.column_stack([vs, vd]))
             o_pos = np.column_stack([os_, od])
