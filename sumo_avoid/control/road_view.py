@@ -26,7 +26,7 @@ from sumo_avoid.road.route_lanes import RouteLanes
 from sumo_avoid.road.polyline import arc_lengths
 from sumo_avoid.road.regulation import legal_limits, limit_index
 from sumo_avoid.core.types import EgoTask, Observation
-from sumo_avoid.sensing.perception import in_lanes, obstacle_vehicles, on_carriageway, towards_path
+from sumo_avoid.sensing.perception import obstacle_vehicles, on_carriageway, towards_path
 
 #: Vehicles farther than this across the path are not part of the ego's road scene, m.
 MAX_ABS_D_M = 20.0
@@ -306,7 +306,7 @@ class RoadView:
             line_lo, line_hi = self.corridor(os_)
             lo, hi = np.minimum(lo, line_lo + off), np.maximum(hi, line_hi + off)
             keep = (od + half > lo - OUTSIDE_MARGIN_M) & (od - half < hi + OUTSIDE_MARGIN_M)
-            lo_k, hi_k, half = lo[keep], hi[keep], half[keep]
+            lo_k, hi_k = lo[keep], hi[keep]
             os_, od, o_rel, o_len, o_wid, o_vel = os_[keep], od[keep], o_rel[keep], o_len[keep], o_wid[keep], o_vel[keep]
             kerb = kerb[keep]
             # a person or cyclist in or at the ego's lanes counts as grown by vru_margin_m all round (one
@@ -316,15 +316,10 @@ class RoadView:
             # pushed 0.65 m over by people walking on the sidewalk, the ego met a car in the next lane); one on a
             # walkway with its centre well inside the ego's lanes is on the carriageway (unseen 2242: a person crossing
             # the ego's left turn on a walking area over its internal lane, walking away from the side the ego had
-            # drifted to, was passed at its size; the ego, pushed back from the lane's edge, hit it at 2.4 m/s); one
-            # walking in a junction on a walking area that reaches into them keeps its share walking along (bologna_bus_lane,
-            # radar, seed 7: a person walking towards the ego over its internal lane, 0.3 m clear, stepped into its path at
-            # 10 m); beside a street's lanes the kerb stays a kerb (bologna_signals, radar, seed 8: people on the sidewalk,
-            # placed by the radar up to half a metre in, pushed the ego about and it touched a car standing beside it)
+            # drifted to, was passed at its size; the ego, pushed back from the lane's edge, hit it at 2.4 m/s)
             vs, vd = self.frame.velocity_to_frenet(os_, od, o_vel)
             share, kerb = on_carriageway(np.asarray(vru, float)[keep], kerb, od, lo_k, hi_k)
-            open_ = in_lanes(od, half, lo_k, hi_k) & (self.lanes.internal(os_) if self.lanes is not None else False)
-            grow = 2.0 * vru_margin_m * towards_path(share, vd * np.sign(d_raw - od), open_)
+            grow = 2.0 * vru_margin_m * towards_path(share, vd * np.sign(d_raw - od))
             o_len, o_wid = o_len + grow, o_wid + grow
             od, o_rel, o_vel = self._from_line(os_, od, o_rel, np.column_stack([vs, vd]))
             o_pos = np.column_stack([os_, od])

@@ -101,12 +101,6 @@ class RouteLanes:
         return np.minimum(m, self._kerb[k, 0]), np.minimum(m, self._kerb[k, 1])
 
 
-    def internal(self, s) -> np.ndarray:
-        """(N,) bool: is the route inside a junction (on an internal lane) at arc lengths s?"""
-        k = np.clip(np.searchsorted(self._starts, np.atleast_1d(np.asarray(s, float)), side="right") - 1, 0,
-                    len(self.pieces) - 1)
-        return np.array([_is_internal(p) for p in self.pieces], bool)[k]
-
     def lanes_end_s(self, s: float) -> float:
         """Arc length where the lanes of the edge at s that do not continue the route start to taper
         off (the corridor's taper, see the module doc), or where the edge ends if nothing follows it:

@@ -138,22 +138,14 @@ def on_carriageway(share, kerb, d, lo, hi) -> tuple[np.ndarray, np.ndarray]:
     return np.where(deep, 1.0, np.asarray(share, float)), np.asarray(kerb, bool) & ~deep
 
 
-def towards_path(share, closing_mps, in_lane=False) -> np.ndarray:
+def towards_path(share, closing_mps) -> np.ndarray:
     """(N,) the VRU margin's share (:func:`_weight`) once the controller knows each road user's speed
     towards the ego's path across the road (``closing_mps``): a person on a walkway keeps its share only
-    while it walks towards the path faster than :data:`KERB_STAND_MPS`, or walks ``in_lane`` (:func:`in_lanes`:
-    on a walking area laid over the ego's lane, no kerb between: it may step into the path unseen); walking along the kerb it is passed
+    while it walks towards the path faster than :data:`KERB_STAND_MPS`; walking along the kerb it is passed
     at its size, like one standing there."""
     share = np.asarray(share, float)
-    kerb = (share > 0.0) & (share < 1.0) & ~np.asarray(in_lane, bool)
+    kerb = (share > 0.0) & (share < 1.0)
     return np.where(kerb & (np.asarray(closing_mps, float) <= KERB_STAND_MPS), 0.0, share)
-
-
-def in_lanes(d, half, lo, hi) -> np.ndarray:
-    """(N,) bool: does a road user (centre ``d`` across the road, ``half`` its half extent across) reach into
-    the ego's lanes (``lo``..``hi``)? From a radar, the box's near side is the return: a point of the person."""
-    d, half = np.asarray(d, float), np.asarray(half, float)
-    return (d + half > np.asarray(lo)) & (d - half < np.asarray(hi))
 
 
 def _lane_along(det, k, small, along):

@@ -41,9 +41,3 @@ def test_lanes_that_do_not_continue_end_where_their_taper_starts():
              LanePiece(20.0, 40.0, "A", 1, (-3.2, 0.0), (-3.2, 0.0), (3.2, 3.2)),
              LanePiece(40.0, 50.0, ":J_0", 0, (0.0,), (0.0,), (3.0,)))
     assert RouteLanes(blend).lanes_end_s(5.0) == 30.0
-
-
-def test_inside_a_junction_where_the_path_is_on_an_internal_lane():
-    # A 0-100, :J_0 100-110, B 110-200; a piece's start belongs to it
-    got = RouteLanes(PIECES).internal([0.0, 99.9, 100.0, 105.0, 109.9, 110.0, 250.0])
-    assert got.tolist() == [False, False, True, True, True, False, False]

@@ -45,22 +45,6 @@ def test_a_person_walking_along_the_kerb_is_passed_at_its_size():
     assert towards_path(share, closing).tolist() == [1.0, 0.0, 0.0, 0.5, 0.0, 0.0]
 
 
-
-def test_a_person_walking_on_a_walking_area_over_the_ego_lane_keeps_its_margin_walking_along():
-    from sumo_avoid.sensing.perception import in_lanes, towards_path
-
-    # lanes -1.6..2.35 across (a junction's internal lane, widened to the left); half extents across 0.24 (a
-    # person walking along) / 0.4 (a radar's person box): centres -1.52 (its side 0.32 m into the lane: SUMO's
-    # walking area laid over it), -2.05 (its box's near side, the return, 0.05 m short of the lane), -1.9 (a person
-    # on the sidewalk beside it, 0.06 m short), 2.5 on the left (0.09 m into the lane)
-    d, half = [-1.52, -2.05, -1.9, 2.5], [0.24, 0.4, 0.24, 0.24]
-    inside = in_lanes(d, half, -1.6, 2.35)
-    assert inside.tolist() == [True, False, False, True]
-    # walking along (closing 0): the one reaching into the lane keeps the walkway share, the others none; a
-    # person standing on the walkway has share 0 already (perception._weight) and keeps it
-    assert towards_path([0.5, 0.5, 0.5, 0.0], [0.0, 0.0, 0.0, 0.0], inside).tolist() == [0.5, 0.0, 0.0, 0.0]
-
-
 def test_a_person_at_the_kerb_far_off_the_traffic_direction_is_taken_to_stand():
     from sumo_avoid.core.types import Detections
     from sumo_avoid.sensing.perception import obstacle_vehicles, observable, velocity_estimate
