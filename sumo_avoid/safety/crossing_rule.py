@@ -7,10 +7,7 @@
   stops ``stop_margin_m`` before the crossing's area -- when it can still stop braking at
   ``commit_decel_mps2`` at most; a crossing whose own signal is not green for the people (``G``/``g``)
   is not theirs to cross (:func:`~sumo_avoid.road.crossings.people_may_cross`);
-* never stop on a crossing: the ego does not enter a crossing, also one where it has the way, while a person
-  on it is in its way or gets there before the ego is across (bologna_signals, radar, seeds 5, 7 and 10: the ego
-  turned right onto a crossing where cars have the way while a person walked over it, and stood on it for
-  them), nor while a vehicle or a person stands (slower
+* never stop on a crossing: the ego does not enter a crossing while a vehicle or a person stands (slower
   than :data:`QUEUE_MPS`) on its path within its own length plus :data:`ROOM_M` beyond the crossing, or a
   vehicle going its way would stand there braking at :data:`LEAD_DECEL_MPS2` (a queue forming), or a
   light not green holds it at a stop line there (:func:`light_beyond`), and
@@ -109,8 +106,8 @@ class CrossingRule:
             # will be in its way before it is across
             over = any(b.s_enter_m <= s_front and s_front - ego_length_m - p.stop_margin_m < b.s_exit_m
                        for b in crossings[:i])
-            clear_s = self._time_to_clear(c, s_front, v, ego_length_m)
-            if self._blocked(c, task, snap, ego_row, persons, ego_length_m, ego_width_m, clear_s, over):
+            horizon = self._time_to_clear(c, s_front, v, ego_length_m) if over else math.inf
+            if self._blocked(c, task, snap, ego_row, persons, ego_length_m, ego_width_m, horizon):
                 line = self._wait_line(crossings[:i], c.s_enter_m, s_front, v, ego_length_m)
                 return math.sqrt(2.0 * p.comfort_decel_mps2 * max(line - s_front - p.stop_margin_m, 0.0)), line
         return math.inf, -1.0
@@ -121,18 +118,13 @@ class CrossingRule:
         a = CLEAR_ACCEL_MPS2
         return (-v + math.sqrt(v * v + 2.0 * a * max(dist, 0.0))) / a
 
-    def _blocked(self, c, task, snap, ego_row, persons, ego_length_m, ego_width_m, clear_s=math.inf,
-                 over=False) -> bool:
+    def _blocked(self, c, task, snap, ego_row, persons, ego_length_m, ego_width_m, horizon_s=math.inf) -> bool:
         p = self.p
-        if len(persons):
-            lanes, half = [snap.lane[r] for r in persons], 0.5 * ego_width_m + p.crossing_margin_m
-            # giving way, on the people's green: anyone on it or about to cross (over an earlier crossing: who
-            # gets in the way before the ego is across); after it: those still on it. Where the ego has the way,
-            # those on it in its way or getting there before it is across: it would stop on the crossing for them
-            horizon = clear_s if over or not c.gives_way else math.inf
-            on_only = not (c.gives_way and people_may_cross(c, snap.signals))
-            if persons_at(c, lanes, snap.pos[persons], snap.vel[persons], half, p.crossing_gap_m, horizon,
-                          on_only=on_only).any():
+        if c.gives_way and len(persons):
+            lanes = [snap.lane[r] for r in persons]
+            # on the people's green: anyone on it or about to cross; after it: those still on it
+            if persons_at(c, lanes, snap.pos[persons], snap.vel[persons], 0.5 * ego_width_m + p.crossing_margin_m,
+                          p.crossing_gap_m, horizon_s, on_only=not people_may_cross(c, snap.signals)).any():
                 return True
         return (not room_beyond(c, task.path, snap, ego_row, ego_length_m + ROOM_M)
                 or light_beyond(c, task.links, snap.signals, ego_length_m + ROOM_M))

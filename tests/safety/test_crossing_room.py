@@ -52,38 +52,3 @@ def _links(*spans):
 ])
 def test_a_stop_at_a_line_just_beyond_a_crossing_it_is_on_stands_on_it(s_front, s_line, stands):
     assert stands_on_crossing(_links((22.0, 25.9)), s_front, s_line, 4.8) is stands
-
-
-def _cap_where_the_ego_has_the_way(u, w):
-    """CrossingRule.cap for an ego (4.8 m, front at s = 10 m, 10 m/s) before a crossing where cars have the way:
-    the crossing runs across the path at x = 20-24 m from (22, 6) to (22, -6), the path passing over it at 6 m
-    from its first end; one person on it u m from its first end, walking w m/s
-    along it (towards the path: +)."""
-    from sumo_avoid.road.crossings import CrossingLink
-    from sumo_avoid.road.regulation import RulesParams
-    from sumo_avoid.safety.crossing_rule import CrossingRule
-
-    c = CrossingLink(":J_c0", ":J_c0_0", (":J_w0_0", ":J_w1_0"), ((22.0, 6.0), (22.0, -6.0)), 20.0, 24.0,
-                     gives_way=False, strip=(6.0, 6.0))
-    task = SimpleNamespace(links=(SimpleNamespace(crossings=(c,), tls="", s_stop_m=100.0),), path=PATH)
-    snap = Snapshot(0.0, ("ego", "walker"), [[7.6, 0.0], [22.0, 6.0 - u]], [[10.0, 0.0], [0.0, -w]], [0.0, -np.pi / 2],
-                    [4.8, 0.215], [1.8, 0.478], [True, False], is_person=np.array([False, True]),
-                    lane=("E_0", ":J_c0_0"))
-    return CrossingRule(RulesParams()).cap(task, 10.0, 10.0, snap, 0, 4.8)
-
-
-@pytest.mark.parametrize("u, w, held", [
-    (6.0, 1.2, True),  # in the path's stretch (6 +- 0.9 + 1 m margin: 4.1-7.9)
-    (7.5, 1.2, True),  # past the path but within its stretch, walking away from it
-    (8.5, 1.2, False),  # ... beyond the stretch, walking away
-    # walking towards it: the ego (10 m/s, from 1.5 m/s^2) has its rear off the crossing in
-    # (-10 + sqrt(100 + 3 x (24 + 4.8 - 10))) / 1.5 = 1.671 s, when the person has walked 2.005 m
-    (2.1, 1.2, True),  # 2.0 m before the stretch
-    (2.0, 1.2, False),  # 2.1 m before it: past the path before the person gets there
-    (2.1, 0.0, False),  # standing on it, out of the way
-])
-def test_where_the_ego_has_the_way_a_person_on_the_crossing_in_its_way_holds_it_before_the_crossing(u, w, held):
-    # the ego would otherwise stop on the crossing for the person (bologna_signals, radar, seeds 5, 7, 10)
-    cap, line = _cap_where_the_ego_has_the_way(u, w)
-    # held: it stops 1 m before the crossing, 10 m ahead, braking at 3 m/s^2: sqrt(2 x 3 x 9)
-    assert (cap, line) == ((pytest.approx(np.sqrt(54.0)), 20.0) if held else (np.inf, -1.0))
