@@ -38,13 +38,25 @@ class Recording:
         return f"{m.get('scenario')} · {m.get('controller')} · seed {m.get('seed')}"
 
 
+#: The columns the viewers read from each of a run's tables (a table without them is not a run's).
+COLUMNS = {"trajectories.csv": ("step", "time_s", "id", "is_ego", "x", "y", "heading", "length", "width"),
+           "persons.csv": ("step", "time_s", "id", "x", "y", "heading", "length", "width"),
+           "signals.csv": ("time_s", "tls", "state"), "detections.csv": ("time_s", "ego", "x", "y"),
+           "ssm_conflicts.csv": ("ego", "foe", "begin_s")}
+
+
 def _csv(path: pathlib.Path) -> pd.DataFrame | None:
     if not path.is_file() or path.stat().st_size == 0:
         return None
     try:
-        return pd.read_csv(path, dtype={"id": str, "ego": str, "foe": str, "tls": str, "state": str, "target": str})
+        table = pd.read_csv(path, dtype={"id": str, "ego": str, "foe": str, "tls": str, "state": str, "target": str})
     except (OSError, ValueError) as e:
         raise ScenarioError(str(path), "<file>", f"a table written by a run ({e})", show_got=False) from None
+    missing = [c for c in COLUMNS.get(path.name, ()) if c not in table.columns]
+    if missing:
+        raise ScenarioError(str(path), "<file>", f"a table written by a run (no column {', '.join(missing)})",
+                            show_got=False)
+    return table
 
 
 def load(run_dir, flag: str = "RUN_DIR", net_file=None) -> Recording:

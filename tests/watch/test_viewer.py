@@ -76,3 +76,18 @@ def test_a_big_traffic_run_is_thinned_below_20_mb(crash_run):
     page = viewer_html(rec)
     data = json.loads(page.split("window.RUN=")[1].split(";</script>")[0])
     assert data["stride"] >= 2 and len(page) < 20e6
+
+
+@pytest.mark.parametrize("table, text", [("signals.csv", "garbage\n1\n"), ("persons.csv", "a,b\n1,2\n"),
+                                         ("ssm_conflicts.csv", "ego\nx\n")])
+def test_a_run_folder_with_a_table_not_written_by_a_run_is_one_line_exit_2(crash_run, tmp_path, capsys, table, text):
+    import shutil
+
+    run = tmp_path / "run"
+    shutil.copytree(crash_run, run)
+    (run / table).write_text(text)
+    out = tmp_path / "report.html"
+    assert main(["report", str(run), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and table in err[0] and "no column" in err[0]
+    assert not out.exists()
