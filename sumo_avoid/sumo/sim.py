@@ -152,12 +152,14 @@ class SumoSim:
                 self._persons[pid] = (libsumo.person.getLength(pid), libsumo.person.getWidth(pid))
 
     def read(self) -> Snapshot:
-        """The world now, as an immutable snapshot (centres, math headings)."""
+        """The world now, as an immutable snapshot (centres, math headings); empty before the first step."""
+        if not self._stepped:
+            return Snapshot.empty(self.time_s, {})
         res = libsumo.vehicle.getAllSubscriptionResults()
         key = tuple(res)
         if key != self._static_key:  # ids, lengths, widths, ego flags, rows only change with the vehicle set
             dims_of = self._dims
-            ids = tuple(v for v in key if v in dims_of)  # libsumo keeps a previous run's results until a step
+            ids = tuple(v for v in key if v in dims_of)  # the vehicles this run subscribed
             self._static_key = key
             self._static = (ids, np.array([dims_of[v] for v in ids], dtype=float).reshape(-1, 2),
                             np.array([v in self._egos for v in ids], dtype=bool), tuple(self._vclass[v] for v in ids))
@@ -245,10 +247,10 @@ class SumoSim:
                 self.note(f"sumo-avoid: {vid} has no finite position at {self.time_s:.2f} s; left out of the steps where SUMO gives none")
         return ok
 
-    def _signals(self) -> dict[str, str]:
-        """Every signal's state; none before the first step, where libsumo's results are still a previous run's."""
+    @staticmethod
+    def _signals() -> dict[str, str]:
         state = libsumo.constants.TL_RED_YELLOW_GREEN_STATE
-        return {tls: r[state] for tls, r in libsumo.trafficlight.getAllSubscriptionResults().items()} if self._stepped else {}
+        return {tls: r[state] for tls, r in libsumo.trafficlight.getAllSubscriptionResults().items()}
 
     @property
     def time_s(self) -> float:
@@ -266,8 +268,7 @@ class SumoSim:
         return frozenset(libsumo.simulation.getPendingVehicles())
 
     def arrived(self) -> frozenset[str]:
-        """Vehicles SUMO took out of the network in the last step: at the end of their route (with no
-        teleporting and collisions only reported, SUMO removes a vehicle for nothing else)."""
+        """Vehicles SUMO took out in the last step: at their route's end (nothing else, with no teleporting)."""
         return self._arrived
 
     def pending(self) -> int:
@@ -346,22 +347,21 @@ class SumoSim:
             self._stepped = True
         except (libsumo.TraCIException, libsumo.FatalTraCIError) as e:
             raise SumoStepError(" ".join(str(e).split())) from None
-        arrived = libsumo.simulation.getSubscriptionResults()[libsumo.constants.VAR_ARRIVED_VEHICLES_IDS]
-        self._arrived = frozenset(arrived)
-        for vid in arrived:
+        c, results = libsumo.constants, libsumo.simulation.getSubscriptionResults()
+        self._arrived = frozenset(results[c.VAR_ARRIVED_VEHICLES_IDS])
+        for vid in self._arrived:
             self._placement.forget(vid)
             self._dims.pop(vid, None)
             self._vclass.pop(vid, None)
             self._egos.discard(vid)
             self._applied.pop(vid, None)
             self._static_key = None
-        self._subscribe_new(self.departed())
-        results = libsumo.simulation.getSubscriptionResults()
-        for pid in results[libsumo.constants.VAR_ARRIVED_PERSONS_IDS]:
+        self._subscribe_new(results[c.VAR_DEPARTED_VEHICLES_IDS])
+        for pid in results[c.VAR_ARRIVED_PERSONS_IDS]:
             self._persons.pop(pid, None)
-        self._subscribe_persons(results[libsumo.constants.VAR_DEPARTED_PERSONS_IDS])
+        self._subscribe_persons(results[c.VAR_DEPARTED_PERSONS_IDS])
         t = self.time_s
-        return [SumoCollision(t, c.collider, c.victim, c.type, c.lane) for c in libsumo.simulation.getCollisions()]
+        return [SumoCollision(t, k.collider, k.victim, k.type, k.lane) for k in libsumo.simulation.getCollisions()]
 
     def add_free_vehicles(self, ids, centre: np.ndarray, heading: np.ndarray, speed: float,
                           length_m: float, width_m: float, type_id: str = "flock") -> None:
