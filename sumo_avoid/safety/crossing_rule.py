@@ -34,7 +34,10 @@ from sumo_avoid.road.yielding import link_state
 
 RED_OR_YELLOW = RED | frozenset("yY")  # a light beyond a crossing that will hold the ego (road.regulation)
 QUEUE_MPS = 1.0  # a vehicle slower than this beyond a crossing is standing in a queue, m/s
-ROOM_M = 1.0  # the ego enters a crossing only with its length + this free beyond it, m
+# the ego enters a crossing (junction_box: a junction) only with its length + this free beyond it, m: the gap a car
+# keeps to a standing one (APF-SA's governor 2.0 m, SUMO's default minGap 2.5 m). With 1.0 m, berlin_eastbound
+# seed 6 (truth) entered behind a car standing 6 m beyond a crossing and stood 0.5 m on it, 2 m behind the car.
+ROOM_M = 2.5
 LANE_HALF_M = 1.6  # a vehicle this close to the ego's path (centre to path) is on it, m
 LEAD_DECEL_MPS2 = 4.5  # a vehicle ahead beyond a crossing could stop braking this hard (SUMO's default decel), m/s^2
 CLEAR_ACCEL_MPS2 = 1.5  # an ego over a crossing clears the next one speeding up at least this, m/s^2

@@ -52,3 +52,17 @@ def _links(*spans):
 ])
 def test_a_stop_at_a_line_just_beyond_a_crossing_it_is_on_stands_on_it(s_front, s_line, stands):
     assert stands_on_crossing(_links((22.0, 25.9)), s_front, s_line, 4.8) is stands
+
+
+def test_the_room_asked_beyond_a_crossing_holds_a_car_stopping_at_apf_sas_standstill_gap():
+    """berlin_eastbound seed 6 (truth): a car stood with its rear 6 m beyond a crossing at a junction's exit; the
+    rule asked the 4.5 m ego for 4.5 + 1 m and let it in, and APF-SA, stopping 2 m behind the car (its governor's
+    standstill gap), stood with its rear 0.5 m on the crossing. The room asked covers the length and that gap."""
+    from sumo_avoid.control.apf.apf import ApfParams
+    from sumo_avoid.safety.crossing_rule import ROOM_M
+    gap = ApfParams().gov_standstill_m
+    assert ROOM_M >= gap
+    # the standing car's rear 6 m beyond the crossing's exit (x = 20): the ego would stop with its rear at 20 - 0.5
+    assert not room_beyond(CROSSING, PATH, _snap(26.0 + 2.25, 0.0), 0, 4.5 + ROOM_M)
+    # its rear 4.5 + ROOM_M + 0.1 m beyond: room
+    assert room_beyond(CROSSING, PATH, _snap(20.0 + 4.5 + ROOM_M + 0.1 + 2.25, 0.0), 0, 4.5 + ROOM_M)
