@@ -45,12 +45,14 @@ from __future__ import annotations
 import argparse
 import contextlib
 import cProfile
+import ctypes
 import io
 import math
 import multiprocessing as mp
 import os
 import pathlib
 import pstats
+import signal
 import sys
 import tempfile
 import time
@@ -276,7 +278,18 @@ def side(which: str, toml: str, turns: Turns | None, profile: bool = False) -> d
             "turns_s": turns.turns if turns is not None else []}
 
 
-def _child(which, me, toml, cpu, sems, done, chunk, counter, profile, queue, run_side) -> None:
+def _die_with_parent(parent: int) -> None:
+    """Linux: this side gets SIGTERM when the harness dies (``kill`` of the harness alone left both sides running
+    on, a CPU held for half an hour); elsewhere nothing."""
+    with contextlib.suppress(Exception):
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+    if os.getppid() != parent:  # died before the call
+        os._exit(1)
+
+
+def _child(which, me, toml, cpu, sems, done, chunk, counter, profile, queue, run_side, parent=None) -> None:
+    if parent is not None:
+        _die_with_parent(parent)
     os.sched_setaffinity(0, {cpu})
     turns = Turns(sems[me], sems[1 - me], done, me, chunk, counter)
     try:
@@ -295,7 +308,7 @@ def interleaved(toml: pathlib.Path, cpu: int, chunk: int, n_steps: int, profile:
     counters = (ctx.Value("i", 0), ctx.Value("i", 0))
     queue = ctx.Queue()
     procs = [ctx.Process(target=_child, args=(w, k, str(toml), cpu, sems, done, chunk, counters[k],
-                                              profile and k == 1, queue, run_side))
+                                              profile and k == 1, queue, run_side, os.getpid()))
              for k, w in enumerate(sides)]
     for p in procs:
         p.start()
