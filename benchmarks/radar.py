@@ -287,9 +287,8 @@ def _die_with_parent(parent: int) -> None:
         os._exit(1)
 
 
-def _child(which, me, toml, cpu, sems, done, chunk, counter, profile, queue, run_side, parent=None) -> None:
-    if parent is not None:
-        _die_with_parent(parent)
+def _child(which, me, toml, cpu, sems, done, chunk, counter, profile, queue, run_side, parent) -> None:
+    _die_with_parent(parent)
     os.sched_setaffinity(0, {cpu})
     turns = Turns(sems[me], sems[1 - me], done, me, chunk, counter)
     try:
