@@ -183,8 +183,9 @@ def polyline_tangent(path, point):
     return s, a, d / max(np.hypot(d[0], d[1]), 1e-12)
 
 
-#: A turn sharper than this (cosine between consecutive segments) turns the line back on itself.
-SPUR_COS = -0.7
+#: A turn sharper than this (cosine between consecutive segments) turns the line back on itself: more than 90
+#: degrees, its next segment runs against the way it came in.
+SPUR_COS = 0.0
 #: An excursion that comes back past where it turned within this much line is a spur, m.
 SPUR_REACH_M = 50.0
 #: The line that replaces a spur rejoins the way back this many metres ahead per metre across.

@@ -87,6 +87,23 @@ def test_a_hairpin_inside_a_junction_is_left_where_its_way_back_starts():
     assert np.allclose(out[3:], pts[3:])
 
 
+def test_a_hook_that_turns_back_by_less_than_135_degrees_is_a_spur_too():
+    """Unseen Chiang Mai, 688930917_1 -> 694361371_1 (a 0.2 m edge) -> :1814993162_5_0, by hand: the line runs
+    west to (0, 0), the next lane starts 1.1 m back, at (0.5, -1) (a turn of 117 degrees: cosine -0.447), and the
+    line goes on north-west from (0, -0.5). The way back starts at (0.5, -1): the line leaves the way in level with
+    it, at (0.5, 0), and rejoins where it is twice as far ahead as across, on (0, -0.5) -> (-3, 2.5) at the first
+    0.05 m sample past t = 1/6 of the way (0.25 m of line: (-0.25, 0.25) / sqrt(2) from (0, -0.5)). The hook
+    bent the route frame's heading 1 rad over 10 m; the ego followed it out of its lane, stopped askew
+    across two lanes and was hit 12 times."""
+    from sumo_avoid.road.polyline import cut_spurs
+
+    pts = np.array([[10.0, 0.0], [0.0, 0.0], [0.5, -1.0], [0.0, -0.5], [-3.0, 2.5]])
+    out, keep = cut_spurs(pts)
+    assert keep.tolist() == [True, True, False, True, True]
+    r = 0.25 / np.sqrt(2.0)
+    assert np.allclose(out[keep], [[10.0, 0.0], [0.5, 0.0], [-r, -0.5 + r], [-3.0, 2.5]])
+
+
 @pytest.mark.parametrize("pts", [
     [[0.0, 0.0], [10.0, 0.0], [0.0, 3.0], [-20.0, 3.0]],  # a sharp U-turn: never back past x = 10 going east
     [[0.0, 0.0], [10.0, 0.0], [20.0, 1.0], [30.0, 5.0], [30.0, 20.0]],  # a left turn: no turn back at all
