@@ -272,13 +272,34 @@ class RoadView:
             v = min(v, max(float(o_vs[ahead].min()) - DROP_BACK_MPS, 0.0))
         return hold, v
 
-    def _from_line(self, s, d, rel_heading, vel):
+    def _line_axes(self, s):
+        """(on (N,) bool, tangent (N, 2), normal (N, 2)): where s lies on a drivable line's stretch, the line's own
+        directions there (its xy polyline's frame); (all False, None, None) without a line."""
+        s = np.atleast_1d(np.asarray(s, float))
+        if self._line_frame is None:
+            return np.zeros(len(s), bool), None, None
+        on = (np.abs(self.line.offset(s)) > 1e-9) | (self.line.slope(s) != 0.0)
+        frame, grid, arc = self._line_frame
+        a = np.interp(s, grid, arc)
+        return on, frame.tangent_at(a), frame.normal_at(a)
+
+    def _from_line(self, s, d, rel_heading, vel, heading, vel_xy):
         """Lane-centre frame -> the drivable line's: d, relative heading and velocity (s_dot, d_dot)
-        measured from the line (its offset and slope at s)."""
+        measured from the line: its offset at s, and on its stretches its own direction (``heading``, rad,
+        and ``vel_xy`` (N, 2), m/s, in the plane). The lane frame's tangent plus the offset's slope is that
+        direction only where the lane polyline turns smoothly; at a vertex that turns at once (unseen Chiang
+        Mai, a 90-degree vertex in a 1.6 m lane) the slope turns the other way and the heading read 1 rad off."""
         slope = self.line.slope(s)
         vel = np.array(vel, float).reshape(-1, 2)
         vel[:, 1] -= vel[:, 0] * slope
-        return d - self.line.offset(s), wrap_angle(rel_heading - np.arctan(slope)), vel
+        rel = wrap_angle(rel_heading - np.arctan(slope))
+        on, t, n = self._line_axes(s)
+        if on.any():
+            v_xy = np.asarray(vel_xy, float).reshape(-1, 2)
+            rel = np.where(on, wrap_angle(np.asarray(heading, float) - np.arctan2(t[:, 1], t[:, 0])), rel)
+            vel = np.where(on[:, None], np.column_stack([np.einsum("ij,ij->i", v_xy, t),
+                                                         np.einsum("ij,ij->i", v_xy, n)]), vel)
+        return d - self.line.offset(s), rel, vel
 
     def scene(self, obs: Observation, row: int, sense_radius_m: float, vru_margin_m: float = 0.0) -> FrenetScene:
         snap = obs.snapshot
@@ -288,7 +309,7 @@ class RoadView:
         h_path = float(self.frame.heading_at(s)[0])
         v_s, v_d = self.frame.velocity_to_frenet(s, d_raw, snap.vel[row][None, :])
         _, h_rel, vel = self._from_line(np.array([s]), d_raw, np.array([wrap_angle(snap.heading[row] - h_path)]),
-                                        np.array([[v_s[0], v_d[0]]]))
+                                        np.array([[v_s[0], v_d[0]]]), snap.heading[row:row + 1], snap.vel[row:row + 1])
         o_pos, o_hd, o_len, o_wid, o_vel, vru, kerb = obstacle_vehicles(obs, row, q, sense_radius_m, self.walkways)
         if len(o_pos):
             os_, od = self.frame.to_frenet(o_pos, np.full(len(o_pos), s), sense_radius_m)
@@ -321,7 +342,8 @@ class RoadView:
             share, kerb = on_carriageway(np.asarray(vru, float)[keep], kerb, od, lo_k, hi_k)
             grow = 2.0 * vru_margin_m * towards_path(share, vd * np.sign(d_raw - od))
             o_len, o_wid = o_len + grow, o_wid + grow
-            od, o_rel, o_vel = self._from_line(os_, od, o_rel, np.column_stack([vs, vd]))
+            od, o_rel, o_vel = self._from_line(os_, od, o_rel, np.column_stack([vs, vd]),
+                                               o_rel + self.frame.heading_at(os_), o_vel)
             o_pos = np.column_stack([os_, od])
         else:
             o_rel = np.zeros(0)
@@ -342,11 +364,14 @@ class RoadView:
         if speed < 1e-12:
             return np.zeros(2)
         s_ff = s + max(float(v[0]), 0.0) * lead_s
-        d_raw = d + float(self.line.offset(s_ff)[0])  # back from the drivable line to the lane centre's frame
-        d_dot = v[1] + v[0] * float(self.line.slope(s_ff)[0])
-        xy = self.frame.velocity_to_xy(s_ff, d_raw, v[0], d_dot)[0]
-        n = float(np.hypot(*xy))
-        return xy / n * speed if n > 1e-12 else np.zeros(2)
+        on, t, n = self._line_axes(s_ff)
+        if on[0]:  # on a drivable line's stretch: along the line's own direction and across it (_from_line)
+            xy = v[0] * t[0] + v[1] * n[0]
+        else:
+            d_raw = d + float(self.line.offset(s_ff)[0])  # back from the drivable line to the lane centre's frame
+            xy = self.frame.velocity_to_xy(s_ff, d_raw, v[0], v[1] + v[0] * float(self.line.slope(s_ff)[0]))[0]
+        norm = float(np.hypot(*xy))
+        return xy / norm * speed if norm > 1e-12 else np.zeros(2)
 
     def curve_speed(self, s: float, a_lat_mps2: float, decel_mps2: float) -> float:
         """Speed for the road ahead from its curvature (RouteFrame.curve_speed_limit, full envelope):
