@@ -4,6 +4,9 @@
   (tests/data/tight_turn, built here), tighter than the car's 4.25 m: following the lane centre the
   ego came out wide, 7.4 m against the opposite lane (as on netgenerate's rand04, junction 420);
   on the drivable line (road/drivable.py) it keeps to its lanes;
+* a street of 3.2 m lanes that turns 90 degrees at one vertex of its shape (tests/data/vertex_corner; unseen
+  Chiang Mai has them): read against the lane frame's smoothed tangent plus the line's slope, the command swung
+  the ego out of its lane (off_road_m 7.6, phi_wall 1.18 m); along the line's own direction it stays on it;
 * grid08 of the generated suite (netgenerate, all-way stops, randomTrips traffic), seed 2: with a
   constant-speed arrival for a car standing at its line the ego crossed together with a car SUMO
   let go, and the footprints touched in junction A1; first come, first served passes."""
@@ -35,6 +38,23 @@ def test_a_turn_tighter_than_the_car_is_driven_inside_its_lanes(tight_turn):
     m = outputs.run_metrics(runner.run(scenario.load(tight_turn / "t.toml")))
     assert m["goal_reached"] and m["collisions"] == 0
     assert m["wrong_way_m"] == 0.0 and m["off_road_m"] == 0.0 and m["phi_wall"] <= 0.1
+
+
+@pytest.mark.sumo
+def test_a_street_that_turns_at_one_vertex_is_driven_on_its_lane(tmp_path):
+    netconvert("vertex_corner", tmp_path, "c")
+    (tmp_path / "c.rou.xml").write_text(
+        '<routes>\n  <vType id="car" length="4.5" width="1.8" accel="2.6" decel="4.5" maxSpeed="20"/>\n'
+        '  <vehicle id="ego" type="car" depart="0" departPos="10" departSpeed="8"><route edges="AB"/></vehicle>\n'
+        '</routes>\n')
+    (tmp_path / "c.toml").write_text('name = "corner"\n[sim]\nnet = "c.net.xml"\nroutes = ["c.rou.xml"]\nstep_s = 0.1\n'
+                                     'duration_s = 40.0\nseed = 1\n[ego]\nids = ["ego"]\ncontroller = "apf_sa"\n'
+                                     'cruise_speed_mps = 12.0\n')
+    m = outputs.run_metrics(runner.run(scenario.load(tmp_path / "c.toml")))
+    assert m["goal_reached"] and m["collisions"] == 0 and m["wrong_way_m"] == 0.0
+    # a 4.25 m turning radius (1.1 x in the line's hard bound) does not fit a right angle of a 3.2 m lane:
+    # the footprint's corner leaves it by ~0.2 m, the centre never
+    assert m["off_road_m"] == 0.0 and m["phi_wall"] <= 0.3
 
 
 @pytest.mark.sumo
