@@ -5,7 +5,7 @@
   ego came out wide, 7.4 m against the opposite lane (as on netgenerate's rand04, junction 420);
   on the drivable line (road/drivable.py) it keeps to its lanes;
 * a street of 3.2 m lanes that turns 90 degrees at one vertex of its shape (tests/data/vertex_corner; unseen
-  Chiang Mai has them): read against the lane frame's smoothed tangent plus the line's slope, the command swung
+  Chiang Mai has them): read against the lane frame's tangent plus the line's slope, the command swung
   the ego out of its lane (off_road_m 7.6, phi_wall 1.18 m); along the line's own direction it stays on it;
 * grid08 of the generated suite (netgenerate, all-way stops, randomTrips traffic), seed 2: with a
   constant-speed arrival for a car standing at its line the ego crossed together with a car SUMO
