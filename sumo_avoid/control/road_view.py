@@ -113,7 +113,7 @@ class RoadView:
         self.yaw_rate_radps = yaw_rate_radps
         self.turn_radius_m = turn_radius_m
         self._room = 0.5 * task.width_m + LINE_CLEAR_M
-        self._line_frame = None  # the line's own frame and its arc length at the line's grid, for its curvature
+        self._line_frame = None  # the line's own frame and its arc length at the line's grid: its curvature, its direction
         if len(self.line.s):
             xy = self.frame.to_xy(self.line.s, self.line.d)
             # curvature smoothed over 1 m, not 5: the line's swing out before a tight turn is a few metres
