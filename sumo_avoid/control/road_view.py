@@ -274,14 +274,16 @@ class RoadView:
 
     def _line_axes(self, s):
         """(on (N,) bool, tangent (N, 2), normal (N, 2)): where s lies on a drivable line's stretch, the line's own
-        directions there (its xy polyline's frame); (all False, None, None) without a line."""
+        directions there (its xy polyline's frame); (on, None, None) where s lies on none of them."""
         s = np.atleast_1d(np.asarray(s, float))
         if self._line_frame is None:
             return np.zeros(len(s), bool), None, None
         on = (np.abs(self.line.offset(s)) > 1e-9) | (self.line.slope(s) != 0.0)
+        if not on.any():
+            return on, None, None
         frame, grid, arc = self._line_frame
-        a = np.interp(s, grid, arc)
-        return on, frame.tangent_at(a), frame.normal_at(a)
+        n = frame.normal_at(np.interp(s, grid, arc))
+        return on, np.stack([n[:, 1], -n[:, 0]], axis=-1), n  # (the tangent as RouteFrame.tangent_at turns it)
 
     def _from_line(self, s, d, rel_heading, vel, heading, vel_xy):
         """Lane-centre frame -> the drivable line's: d, relative heading and velocity (s_dot, d_dot)

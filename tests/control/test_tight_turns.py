@@ -19,18 +19,24 @@ from sumo_avoid.runs import runner
 from sumo_avoid.scenario import spec as scenario
 
 
+def _one_ego(d, name: str, edges: str, *, length_m: float, depart_pos_m: float, depart_speed_mps: float):
+    """Write ``d/NAME.rou.xml`` (one car, the ego, on ``edges``) and ``d/NAME.toml`` (APF-SA, 40 s, cruise 12 m/s) for
+    the net ``d/NAME.net.xml``; returns d."""
+    (d / f"{name}.rou.xml").write_text(
+        f'<routes>\n  <vType id="car" length="{length_m}" width="1.8" accel="2.6" decel="4.5" maxSpeed="20"/>\n'
+        f'  <vehicle id="ego" type="car" depart="0" departPos="{depart_pos_m}" departSpeed="{depart_speed_mps}">'
+        f'<route edges="{edges}"/></vehicle>\n</routes>\n')
+    (d / f"{name}.toml").write_text(f'name = "{name}"\n[sim]\nnet = "{name}.net.xml"\nroutes = ["{name}.rou.xml"]\n'
+                                    'step_s = 0.1\nduration_s = 40.0\nseed = 1\n[ego]\nids = ["ego"]\n'
+                                    'controller = "apf_sa"\ncruise_speed_mps = 12.0\n')
+    return d
+
+
 @pytest.fixture(scope="module")
 def tight_turn(tmp_path_factory):
     d = tmp_path_factory.mktemp("tight")
     netconvert("tight_turn", d, "t", "--default.junctions.radius", "2")
-    (d / "t.rou.xml").write_text(
-        '<routes>\n  <vType id="car" length="5" width="1.8" accel="2.6" decel="4.5" maxSpeed="20"/>\n'
-        '  <vehicle id="ego" type="car" depart="0" departPos="20" departSpeed="10"><route edges="AB BC"/></vehicle>\n'
-        '</routes>\n')
-    (d / "t.toml").write_text('name = "tight"\n[sim]\nnet = "t.net.xml"\nroutes = ["t.rou.xml"]\nstep_s = 0.1\n'
-                              'duration_s = 40.0\nseed = 1\n[ego]\nids = ["ego"]\ncontroller = "apf_sa"\n'
-                              'cruise_speed_mps = 12.0\n')
-    return d
+    return _one_ego(d, "t", "AB BC", length_m=5.0, depart_pos_m=20.0, depart_speed_mps=10.0)
 
 
 @pytest.mark.sumo
@@ -43,13 +49,7 @@ def test_a_turn_tighter_than_the_car_is_driven_inside_its_lanes(tight_turn):
 @pytest.mark.sumo
 def test_a_street_that_turns_at_one_vertex_is_driven_on_its_lane(tmp_path):
     netconvert("vertex_corner", tmp_path, "c")
-    (tmp_path / "c.rou.xml").write_text(
-        '<routes>\n  <vType id="car" length="4.5" width="1.8" accel="2.6" decel="4.5" maxSpeed="20"/>\n'
-        '  <vehicle id="ego" type="car" depart="0" departPos="10" departSpeed="8"><route edges="AB"/></vehicle>\n'
-        '</routes>\n')
-    (tmp_path / "c.toml").write_text('name = "corner"\n[sim]\nnet = "c.net.xml"\nroutes = ["c.rou.xml"]\nstep_s = 0.1\n'
-                                     'duration_s = 40.0\nseed = 1\n[ego]\nids = ["ego"]\ncontroller = "apf_sa"\n'
-                                     'cruise_speed_mps = 12.0\n')
+    _one_ego(tmp_path, "c", "AB", length_m=4.5, depart_pos_m=10.0, depart_speed_mps=8.0)
     m = outputs.run_metrics(runner.run(scenario.load(tmp_path / "c.toml")))
     assert m["goal_reached"] and m["collisions"] == 0 and m["wrong_way_m"] == 0.0
     # a 4.25 m turning radius (1.1 x in the line's hard bound) does not fit a right angle of a 3.2 m lane:
