@@ -121,6 +121,7 @@ class OpenRun:
             self._tmp.cleanup()
             raise load_error(scn, str(e), at_start=True) from None
         self.sim.apart = scene.road.apart if spec.arena is None else {}  # two levels whatever the heights (road.grade)
+        self.sim.world_before_egos = spec.output.record_radius_m <= 0  # recorded only near egos: none before them
         try:
             for note in scn.sumocfg.notes if scn.sumocfg else ():
                 self.sim.note(note)

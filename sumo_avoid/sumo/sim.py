@@ -125,6 +125,10 @@ class SumoSim:
         self._persons: dict[str, tuple[float, float]] = {}  # person id -> (length, width), static
         self._no_pose: set[str] = set()  # road users SUMO gave a non-finite position (noted once, _finite)
         self._egos: set[str] = set()
+        #: read() gives the whole world before the first ego is taken over (False: only the signals, when nothing
+        #: before it is used: a recording of the road users near egos; a district's warm-up costs SUMO's step alone)
+        self.world_before_egos = True
+        self._taken = False
         self._applied: dict[str, float] = {}  # ego -> the signed speed it was last moved at (see read)
         self._routes: dict[str, tuple[str, ...]] = {}  # ego -> its route as SUMO gave it at take-over
         self._placement = RoutePlacement()
@@ -155,6 +159,8 @@ class SumoSim:
         """The world now, as an immutable snapshot (centres, math headings); empty before the first step."""
         if not self._stepped:
             return Snapshot.empty(self.time_s, {})
+        if not self._taken and not self.world_before_egos:
+            return Snapshot.empty(self.time_s, self._signals())
         res = libsumo.vehicle.getAllSubscriptionResults()
         key = tuple(res)
         if key != self._static_key:  # ids, lengths, widths, ego flags, rows only change with the vehicle set
@@ -283,6 +289,7 @@ class SumoSim:
             libsumo.vehicle.setSpeedMode(vid, EGO_SPEED_MODE)
             libsumo.vehicle.setLaneChangeMode(vid, EGO_LANE_CHANGE_MODE)
         self._egos.add(vid)
+        self._taken = True
         self._static_key = None
         self._routes[vid] = tuple(libsumo.vehicle.getRoute(vid))
         return EgoInfo(vid, self._routes[vid], libsumo.vehicle.getLaneIndex(vid), libsumo.vehicle.getWidth(vid),
