@@ -1,7 +1,8 @@
 """What a district's warm-up costs the plug-in: the steps before its first ego departs, when SUMO fills the
 district with its demand and nothing the plug-in reads is used (the recording keeps road users near egos
-only). The plug-in reads only the signals then (``SumoSim.world_before_egos`` False, what a run does);
-the other side reads the whole world every step as before. Both sides run the same scenario in this
+only). The plug-in reads only the signals then and subscribes to the road users once the first ego is taken
+over (``SumoSim.world_before_egos`` False, what a run does); the other side subscribes to every road user as it
+departs and reads the whole world every step, as before. Both sides run the same scenario in this
 process, taking turns, and must write the same recording.
 
     python benchmarks/warmup.py [--scenario streets/bologna_bus_lane] [--end 320] [--repeat 1]

@@ -126,9 +126,11 @@ class SumoSim:
         self._no_pose: set[str] = set()  # road users SUMO gave a non-finite position (noted once, _finite)
         self._egos: set[str] = set()
         #: read() gives the whole world before the first ego is taken over (False: only the signals, when nothing
-        #: before it is used: a recording of the road users near egos; a district's warm-up costs SUMO's step alone)
+        #: before it is used: a recording of the road users near egos; a district's warm-up costs SUMO's step alone,
+        #: its road users subscribed only when the first ego is taken over)
         self.world_before_egos = True
         self._taken = False
+        self._later: tuple[dict, dict] = ({}, {})  # vehicles, persons departed before the first ego (ordered ids)
         self._applied: dict[str, float] = {}  # ego -> the signed speed it was last moved at (see read)
         self._routes: dict[str, tuple[str, ...]] = {}  # ego -> its route as SUMO gave it at take-over
         self._placement = RoutePlacement()
@@ -288,8 +290,14 @@ class SumoSim:
         if drive:
             libsumo.vehicle.setSpeedMode(vid, EGO_SPEED_MODE)
             libsumo.vehicle.setLaneChangeMode(vid, EGO_LANE_CHANGE_MODE)
+        if not self._taken:
+            self._taken = True
+            cars, people = self._later
+            live, here = set(libsumo.vehicle.getIDList()), set(libsumo.person.getIDList())
+            self._subscribe_new([v for v in cars if v in live])
+            self._subscribe_persons([p for p in people if p in here])
+            self._later = ({}, {})
         self._egos.add(vid)
-        self._taken = True
         self._static_key = None
         self._routes[vid] = tuple(libsumo.vehicle.getRoute(vid))
         return EgoInfo(vid, self._routes[vid], libsumo.vehicle.getLaneIndex(vid), libsumo.vehicle.getWidth(vid),
@@ -363,10 +371,18 @@ class SumoSim:
             self._egos.discard(vid)
             self._applied.pop(vid, None)
             self._static_key = None
-        self._subscribe_new(results[c.VAR_DEPARTED_VEHICLES_IDS])
-        for pid in results[c.VAR_ARRIVED_PERSONS_IDS]:
-            self._persons.pop(pid, None)
-        self._subscribe_persons(results[c.VAR_DEPARTED_PERSONS_IDS])
+        if not self._taken and not self.world_before_egos:  # nothing is read yet: subscribed at the first take-over
+            cars, people = self._later
+            cars.update(dict.fromkeys(results[c.VAR_DEPARTED_VEHICLES_IDS]))
+            people.update(dict.fromkeys(results[c.VAR_DEPARTED_PERSONS_IDS]))
+            for gone, ids in ((cars, self._arrived), (people, results[c.VAR_ARRIVED_PERSONS_IDS])):
+                for x in ids:
+                    gone.pop(x, None)
+        else:
+            self._subscribe_new(results[c.VAR_DEPARTED_VEHICLES_IDS])
+            for pid in results[c.VAR_ARRIVED_PERSONS_IDS]:
+                self._persons.pop(pid, None)
+            self._subscribe_persons(results[c.VAR_DEPARTED_PERSONS_IDS])
         t = self.time_s
         return [SumoCollision(t, k.collider, k.victim, k.type, k.lane) for k in libsumo.simulation.getCollisions()]
 
