@@ -22,6 +22,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from sumo_avoid.runs import outputs, runner  # noqa: E402
+from sumo_avoid.core.config import ScenarioError  # noqa: E402
 from sumo_avoid.scenario import spec as scenario  # noqa: E402
 
 DEFAULT = ("overtaking", "streets/signal_crossing_right")
@@ -35,7 +36,11 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     shares = []
     for name in args.scenario or DEFAULT:
-        scn = scenario.load(ROOT / "scenarios" / f"{name}.toml", args.overrides)
+        try:
+            scn = scenario.load(ROOT / "scenarios" / f"{name}.toml", args.overrides)
+        except ScenarioError as e:
+            print(f"replay_record.py: error: {e}", file=sys.stderr)
+            return 2
         res = runner.run(scn)
         with tempfile.TemporaryDirectory(prefix="replay-bench-") as tmp:
             t0 = time.perf_counter()

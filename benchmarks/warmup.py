@@ -23,6 +23,7 @@ sys.path.insert(0, str(ROOT))
 
 from sumo_avoid.rollout.loop import rollout  # noqa: E402
 from sumo_avoid.runs.runner import OpenRun  # noqa: E402
+from sumo_avoid.core.config import ScenarioError  # noqa: E402
 from sumo_avoid.scenario import spec as scenario  # noqa: E402
 
 
@@ -44,7 +45,11 @@ def main(argv=None) -> int:
     ap.add_argument("--end", type=float, default=320.0, help="simulated seconds each run lasts")
     ap.add_argument("--repeat", type=int, default=1, help="turns per side")
     args = ap.parse_args(argv)
-    scn = scenario.load(ROOT / "scenarios" / f"{args.scenario}.toml", ["output.plots=false", f"sim.duration_s={args.end}"])
+    try:
+        scn = scenario.load(ROOT / "scenarios" / f"{args.scenario}.toml", ["output.plots=false", f"sim.duration_s={args.end}"])
+    except ScenarioError as e:
+        print(f"warmup.py: error: {e}", file=sys.stderr)
+        return 2
     ratios = []
     for turn in range(args.repeat):
         whole, traj_w, pers_w = _run(scn, True)

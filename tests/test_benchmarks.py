@@ -178,3 +178,19 @@ def test_arena_benchmark_replays_the_run_taking_turns():
     assert "arena run: N=5 4 s, 20 steps" in out.stdout
     assert re.search(r"paired turns \(6, same steps\): plug-in / plain median \d+\.\d{3}", out.stdout), out.stdout
     assert "steps: plain 20/20  plugin 20/20" in out.stderr
+
+
+@pytest.mark.parametrize("script", ["warmup.py", "replay_record.py"])
+def test_a_benchmark_given_a_scenario_that_is_not_there_says_so_in_one_line(script):
+    out = subprocess.run([sys.executable, str(ROOT / "benchmarks" / script), "--scenario", "no_such_scenario"],
+                         capture_output=True, text=True, timeout=120, cwd=ROOT)
+    assert out.returncode == 2 and out.stdout == ""
+    assert out.stderr.count("\n") == 1 and "no_such_scenario.toml" in out.stderr and "Traceback" not in out.stderr
+
+
+def test_warmup_benchmark_compares_the_two_readings_and_prints_its_ratio():
+    out = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "warmup.py"), "--scenario", "streets/van_bike_lane",
+                          "--end", "20"], capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.strip().splitlines()
+    assert "the same" in lines[0] and re.fullmatch(r"ratio=\d+\.\d{3}", lines[-1]), out.stdout
