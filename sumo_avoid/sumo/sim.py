@@ -26,12 +26,9 @@ from sumo_avoid.core.types import EgoTask
 from sumo_avoid.sumo.console import first_error, native_stderr_kept, start_error
 from sumo_avoid.sumo.inputs import FLOCK_MAX_SPEED_MPS
 from sumo_avoid.sumo.placement import RoutePlacement
+from sumo_avoid.sumo.road_users import RoadUsers
 from sumo_avoid.sumo.ssm_device import SsmRequest, equip, ssm_args
 
-_DYNAMIC = (libsumo.constants.VAR_POSITION3D, libsumo.constants.VAR_ANGLE, libsumo.constants.VAR_SPEED,
-            libsumo.constants.VAR_LANE_ID, libsumo.constants.VAR_LANEPOSITION)
-_PERSON = (libsumo.constants.VAR_POSITION3D, libsumo.constants.VAR_ANGLE, libsumo.constants.VAR_SPEED,
-           libsumo.constants.VAR_LANE_ID, libsumo.constants.VAR_LANEPOSITION, libsumo.constants.VAR_VEHICLE)
 _SIM_VARS = (libsumo.constants.VAR_DEPARTED_VEHICLES_IDS, libsumo.constants.VAR_ARRIVED_VEHICLES_IDS,
              libsumo.constants.VAR_DEPARTED_PERSONS_IDS, libsumo.constants.VAR_ARRIVED_PERSONS_IDS)
 #: libsumo gives a vehicle moved off every lane (an arena's flock) a 3-D position without z: z = 0
@@ -120,61 +117,54 @@ class SumoSim:
         self.step_s = libsumo.simulation.getDeltaT()
         self.apart: dict = {}  # edges crossing without a junction (road.grade), given to every snapshot; set by the runner
         libsumo.simulation.subscribe(list(_SIM_VARS))
-        self._dims: dict[str, tuple[float, float]] = {}  # id -> (length, width), static
-        self._vclass: dict[str, str] = {}  # vehicle id -> SUMO vehicle class, static
-        self._persons: dict[str, tuple[float, float]] = {}  # person id -> (length, width), static
+        self._users = RoadUsers()  # who is subscribed, their sizes and classes (sumo.road_users)
         self._no_pose: set[str] = set()  # road users SUMO gave a non-finite position (noted once, _finite)
         self._egos: set[str] = set()
-        #: read() gives the whole world before the first ego is taken over (False: only the signals, when nothing
-        #: before it is used: a recording of the road users near egos; a district's warm-up costs SUMO's step alone,
-        #: its road users subscribed only when the first ego is taken over)
-        self.world_before_egos = True
         self._taken = False
-        self._later: tuple[dict, dict] = ({}, {})  # vehicles, persons departed before the first ego (ordered ids)
         self._applied: dict[str, float] = {}  # ego -> the signed speed it was last moved at (see read)
         self._routes: dict[str, tuple[str, ...]] = {}  # ego -> its route as SUMO gave it at take-over
         self._placement = RoutePlacement()
         self._arrived: frozenset[str] = frozenset()  # vehicles SUMO took out at their route's end in the last step
         self._static_key: tuple[str, ...] | None = None  # read(): libsumo's ids the cached static part is for
         self._static: tuple = ()
-        self._subscribe_new(libsumo.vehicle.getIDList())
-        self._subscribe_persons(libsumo.person.getIDList())
+        self._users.add(libsumo.vehicle.getIDList(), libsumo.person.getIDList())
         self._stepped = False  # libsumo keeps a previous run's subscription results until the first step
         for tls in libsumo.trafficlight.getIDList():  # every signal's state, read with the vehicles
             libsumo.trafficlight.subscribe(tls, [libsumo.constants.TL_RED_YELLOW_GREEN_STATE])
 
     # --- reading ---------------------------------------------------------------------------
-    def _subscribe_new(self, ids) -> None:
-        for vid in ids:
-            if vid not in self._dims:
-                libsumo.vehicle.subscribe(vid, list(_DYNAMIC))
-                self._dims[vid] = (libsumo.vehicle.getLength(vid), libsumo.vehicle.getWidth(vid))
-                self._vclass[vid] = libsumo.vehicle.getVehicleClass(vid)
+    @property
+    def world_before_egos(self) -> bool:
+        """Does :meth:`read` give the whole world before the first ego is taken over? (True by default. False: only
+        the signals, and no road user is subscribed before it (:mod:`sumo_avoid.sumo.road_users`), when nothing read
+        then is used: a recording of the road users near egos.)"""
+        return not self._users.defer
 
-    def _subscribe_persons(self, ids) -> None:
-        for pid in ids:
-            if pid not in self._persons:
-                libsumo.person.subscribe(pid, list(_PERSON))
-                self._persons[pid] = (libsumo.person.getLength(pid), libsumo.person.getWidth(pid))
+    @world_before_egos.setter
+    def world_before_egos(self, whole: bool) -> None:
+        if whole or self._taken:
+            self._users.start()  # (subscribes to whoever departed while it deferred)
+        else:
+            self._users.defer = True
 
     def read(self) -> Snapshot:
         """The world now, as an immutable snapshot (centres, math headings); empty before the first step."""
         if not self._stepped:
             return Snapshot.empty(self.time_s, {})
-        if not self._taken and not self.world_before_egos:
+        if self._users.defer:
             return Snapshot.empty(self.time_s, self._signals())
         res = libsumo.vehicle.getAllSubscriptionResults()
         key = tuple(res)
         if key != self._static_key:  # ids, lengths, widths, ego flags, rows only change with the vehicle set
-            dims_of = self._dims
+            dims_of = self._users.dims
             ids = tuple(v for v in key if v in dims_of)  # the vehicles this run subscribed
             self._static_key = key
             self._static = (ids, np.array([dims_of[v] for v in ids], dtype=float).reshape(-1, 2),
-                            np.array([v in self._egos for v in ids], dtype=bool), tuple(self._vclass[v] for v in ids))
+                            np.array([v in self._egos for v in ids], dtype=bool), tuple(self._users.vclass[v] for v in ids))
         ids, dims, is_ego, vclass = self._static
         n = len(ids)
         signals = self._signals()
-        persons = self._read_persons() if self._persons else None
+        persons = self._read_persons() if self._users.persons else None
         if n == 0 and persons is None:
             return Snapshot.empty(self.time_s, signals)
         rows = res.values() if n == len(key) else [res[v] for v in ids]
@@ -220,7 +210,7 @@ class SumoSim:
         heights; None when there are none. A person's SUMO position is its front, like a vehicle's."""
         c = libsumo.constants
         res = libsumo.person.getAllSubscriptionResults()
-        rows = [(pid, r) for pid, r in res.items() if pid in self._persons and not r[c.VAR_VEHICLE]]
+        rows = [(pid, r) for pid, r in res.items() if pid in self._users.persons and not r[c.VAR_VEHICLE]]
         if not rows:
             return None
         m = len(rows)
@@ -235,7 +225,7 @@ class SumoSim:
                 return None
         z, flat = flat[:, 2], flat[:, [0, 1, 3, 4, 5]]
         p_ids = tuple(pid for pid, _ in rows)
-        dims = np.array([self._persons[pid] for pid in p_ids], float).reshape(m, 2)
+        dims = np.array([self._users.persons[pid] for pid in p_ids], float).reshape(m, 2)
         heading = np.radians(90.0 - flat[:, 2])
         direction = np.column_stack([np.cos(heading), np.sin(heading)])
         lane = tuple(r[c.VAR_LANE_ID] for _, r in rows)
@@ -290,18 +280,13 @@ class SumoSim:
         if drive:
             libsumo.vehicle.setSpeedMode(vid, EGO_SPEED_MODE)
             libsumo.vehicle.setLaneChangeMode(vid, EGO_LANE_CHANGE_MODE)
-        if not self._taken:
-            self._taken = True
-            cars, people = self._later
-            live, here = set(libsumo.vehicle.getIDList()), set(libsumo.person.getIDList())
-            self._subscribe_new([v for v in cars if v in live])
-            self._subscribe_persons([p for p in people if p in here])
-            self._later = ({}, {})
+        self._taken = True
+        self._users.start()
         self._egos.add(vid)
         self._static_key = None
         self._routes[vid] = tuple(libsumo.vehicle.getRoute(vid))
         return EgoInfo(vid, self._routes[vid], libsumo.vehicle.getLaneIndex(vid), libsumo.vehicle.getWidth(vid),
-                       libsumo.vehicle.getLength(vid), self._vclass.get(vid) or libsumo.vehicle.getVehicleClass(vid))
+                       libsumo.vehicle.getLength(vid), self._users.vclass.get(vid) or libsumo.vehicle.getVehicleClass(vid))
 
     def set_route(self, vid: str, edges) -> bool:
         """Give ego ``vid`` (taken over, on ``edges[0]``) the route ``edges`` in SUMO too; False (and its route
@@ -324,7 +309,7 @@ class SumoSim:
         if len(ids) == 0:
             return
         heading = np.asarray(heading, float)
-        half = 0.5 * np.array([self._dims[v][0] for v in ids])
+        half = 0.5 * np.array([self._users.dims[v][0] for v in ids])
         fx = (np.asarray(centre[:, 0], float) + half * np.cos(heading)).tolist()
         fy = (np.asarray(centre[:, 1], float) + half * np.sin(heading)).tolist()
         angle = (90.0 - np.degrees(heading)).tolist()
@@ -349,11 +334,10 @@ class SumoSim:
         if vid in self._egos:
             self._egos.discard(vid)
             self._static_key = None
-        if vid in self._dims and vid in libsumo.vehicle.getIDList():
+        if vid in self._users.dims and vid in libsumo.vehicle.getIDList():
             libsumo.vehicle.unsubscribe(vid)
             libsumo.vehicle.remove(vid)
-            self._dims.pop(vid)
-            self._vclass.pop(vid, None)
+            self._users.gone([vid], ())
 
     # --- stepping --------------------------------------------------------------------------
     def step(self) -> list[SumoCollision]:
@@ -366,23 +350,11 @@ class SumoSim:
         self._arrived = frozenset(results[c.VAR_ARRIVED_VEHICLES_IDS])
         for vid in self._arrived:
             self._placement.forget(vid)
-            self._dims.pop(vid, None)
-            self._vclass.pop(vid, None)
             self._egos.discard(vid)
             self._applied.pop(vid, None)
             self._static_key = None
-        if not self._taken and not self.world_before_egos:  # nothing is read yet: subscribed at the first take-over
-            cars, people = self._later
-            cars.update(dict.fromkeys(results[c.VAR_DEPARTED_VEHICLES_IDS]))
-            people.update(dict.fromkeys(results[c.VAR_DEPARTED_PERSONS_IDS]))
-            for gone, ids in ((cars, self._arrived), (people, results[c.VAR_ARRIVED_PERSONS_IDS])):
-                for x in ids:
-                    gone.pop(x, None)
-        else:
-            self._subscribe_new(results[c.VAR_DEPARTED_VEHICLES_IDS])
-            for pid in results[c.VAR_ARRIVED_PERSONS_IDS]:
-                self._persons.pop(pid, None)
-            self._subscribe_persons(results[c.VAR_DEPARTED_PERSONS_IDS])
+        self._users.gone(self._arrived, results[c.VAR_ARRIVED_PERSONS_IDS])
+        self._users.add(results[c.VAR_DEPARTED_VEHICLES_IDS], results[c.VAR_DEPARTED_PERSONS_IDS])
         t = self.time_s
         return [SumoCollision(t, k.collider, k.victim, k.type, k.lane) for k in libsumo.simulation.getCollisions()]
 
