@@ -1,25 +1,23 @@
-"""Which of SUMO's road users the plug-in is subscribed to, and their static sizes and classes (used by
-:class:`~sumo_avoid.sumo.sim.SumoSim` only; the one other module that calls libsumo).
+"""Which of SUMO's road users the plug-in is subscribed to, and their static sizes and classes (a part of
+:class:`~sumo_avoid.sumo.sim.SumoSim`, which hands it libsumo's vehicle and person domains: this module imports no
+libsumo itself).
 
-Every vehicle and person is subscribed as it departs (position, angle, speed, lane, lane position; a person
-also whether it rides) and forgotten when it arrives. Until the first ego is taken over a run may
-``defer``: SUMO computes every subscribed road user's variables in each of its steps, and before any ego
-nothing read is used when the recording keeps only the road users near egos (a district's warm-up,
-Bologna's first 300 s: ``benchmarks/warmup.py``). Deferred, the departures and arrivals are only noted, in
-order, and :meth:`RoadUsers.start` subscribes those still in the net when the first ego is taken over (the
-subscription results are keyed by id: the rows come out as they would have).
+Every vehicle and person is subscribed as it departs (the variables ``SumoSim`` names: position, angle, speed, lane,
+lane position; a person also whether it rides) and forgotten when it arrives. Until the first ego is taken over a run
+may ``defer``: SUMO computes every subscribed road user's variables in each of its steps, and before any ego
+nothing read is used when the recording keeps only the road users near egos (a district's warm-up, Bologna's first
+300 s: ``benchmarks/warmup.py``). Deferred, the departures and arrivals are only noted, in order, and
+:meth:`RoadUsers.start` subscribes those still in the net when the first ego is taken over (the subscription
+results are keyed by id: the rows come out as they would have).
 """
 from __future__ import annotations
 
-import libsumo
-
-_C = libsumo.constants
-DYNAMIC = (_C.VAR_POSITION3D, _C.VAR_ANGLE, _C.VAR_SPEED, _C.VAR_LANE_ID, _C.VAR_LANEPOSITION)
-PERSON = DYNAMIC + (_C.VAR_VEHICLE,)
-
 
 class RoadUsers:
-    def __init__(self):
+    def __init__(self, vehicles, persons, vehicle_vars, person_vars):
+        """``vehicles``, ``persons``: libsumo's ``vehicle`` and ``person`` domains; ``*_vars``: the variables to subscribe."""
+        self._domains = (vehicles, persons)
+        self._vars = (list(vehicle_vars), list(person_vars))
         self.dims: dict[str, tuple[float, float]] = {}  # vehicle id -> (length, width), static
         self.vclass: dict[str, str] = {}  # vehicle id -> SUMO vehicle class, static
         self.persons: dict[str, tuple[float, float]] = {}  # person id -> (length, width), static
@@ -32,15 +30,16 @@ class RoadUsers:
             self._later[0].update(dict.fromkeys(vehicles))
             self._later[1].update(dict.fromkeys(persons))
             return
+        cars, people = self._domains
         for vid in vehicles:
             if vid not in self.dims:
-                libsumo.vehicle.subscribe(vid, list(DYNAMIC))
-                self.dims[vid] = (libsumo.vehicle.getLength(vid), libsumo.vehicle.getWidth(vid))
-                self.vclass[vid] = libsumo.vehicle.getVehicleClass(vid)
+                cars.subscribe(vid, self._vars[0])
+                self.dims[vid] = (cars.getLength(vid), cars.getWidth(vid))
+                self.vclass[vid] = cars.getVehicleClass(vid)
         for pid in persons:
             if pid not in self.persons:
-                libsumo.person.subscribe(pid, list(PERSON))
-                self.persons[pid] = (libsumo.person.getLength(pid), libsumo.person.getWidth(pid))
+                people.subscribe(pid, self._vars[1])
+                self.persons[pid] = (people.getLength(pid), people.getWidth(pid))
 
     def gone(self, vehicles, persons) -> None:
         """Forget arrived ``vehicles`` and ``persons`` (ids)."""
@@ -58,6 +57,6 @@ class RoadUsers:
             return
         self.defer = False
         cars, people = self._later
-        live, here = set(libsumo.vehicle.getIDList()), set(libsumo.person.getIDList())
+        live, here = (set(d.getIDList()) for d in self._domains)
         self._later = ({}, {})
         self.add([v for v in cars if v in live], [p for p in people if p in here])

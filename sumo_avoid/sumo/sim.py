@@ -29,6 +29,9 @@ from sumo_avoid.sumo.placement import RoutePlacement
 from sumo_avoid.sumo.road_users import RoadUsers
 from sumo_avoid.sumo.ssm_device import SsmRequest, equip, ssm_args
 
+_DYNAMIC = (libsumo.constants.VAR_POSITION3D, libsumo.constants.VAR_ANGLE, libsumo.constants.VAR_SPEED,
+            libsumo.constants.VAR_LANE_ID, libsumo.constants.VAR_LANEPOSITION)
+_PERSON = _DYNAMIC + (libsumo.constants.VAR_VEHICLE,)
 _SIM_VARS = (libsumo.constants.VAR_DEPARTED_VEHICLES_IDS, libsumo.constants.VAR_ARRIVED_VEHICLES_IDS,
              libsumo.constants.VAR_DEPARTED_PERSONS_IDS, libsumo.constants.VAR_ARRIVED_PERSONS_IDS)
 #: libsumo gives a vehicle moved off every lane (an arena's flock) a 3-D position without z: z = 0
@@ -117,10 +120,9 @@ class SumoSim:
         self.step_s = libsumo.simulation.getDeltaT()
         self.apart: dict = {}  # edges crossing without a junction (road.grade), given to every snapshot; set by the runner
         libsumo.simulation.subscribe(list(_SIM_VARS))
-        self._users = RoadUsers()  # who is subscribed, their sizes and classes (sumo.road_users)
+        self._users = RoadUsers(libsumo.vehicle, libsumo.person, _DYNAMIC, _PERSON)  # who is subscribed (sumo.road_users)
         self._no_pose: set[str] = set()  # road users SUMO gave a non-finite position (noted once, _finite)
         self._egos: set[str] = set()
-        self._taken = False
         self._applied: dict[str, float] = {}  # ego -> the signed speed it was last moved at (see read)
         self._routes: dict[str, tuple[str, ...]] = {}  # ego -> its route as SUMO gave it at take-over
         self._placement = RoutePlacement()
@@ -142,7 +144,7 @@ class SumoSim:
 
     @world_before_egos.setter
     def world_before_egos(self, whole: bool) -> None:
-        if whole or self._taken:
+        if whole or self._routes:  # (an ego taken over already)
             self._users.start()  # (subscribes to whoever departed while it deferred)
         else:
             self._users.defer = True
@@ -280,7 +282,6 @@ class SumoSim:
         if drive:
             libsumo.vehicle.setSpeedMode(vid, EGO_SPEED_MODE)
             libsumo.vehicle.setLaneChangeMode(vid, EGO_LANE_CHANGE_MODE)
-        self._taken = True
         self._users.start()
         self._egos.add(vid)
         self._static_key = None
