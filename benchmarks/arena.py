@@ -38,6 +38,7 @@ import tempfile
 import time
 
 import numpy as np
+from _args import positive_int  # noqa: E402  (benchmarks/_args.py: this script's folder is on sys.path)
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))  # benchmarks/radar.py's baton (--turns)
@@ -170,7 +171,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--agents", type=int, default=100)
     ap.add_argument("--duration", type=float, default=600.0)
-    ap.add_argument("--repeat", type=int, default=3, help="times the metrics are computed and timed")
+    ap.add_argument("--repeat", type=positive_int, default=3, help="times the metrics are computed and timed")
     ap.add_argument("--skip-neighbours", action="store_true")
     ap.add_argument("--plain", choices=("replay", "straight"), default="replay",
                     help="plain side: replay the run's recorded poses (default; the same SUMO work) or move "

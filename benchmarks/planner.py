@@ -21,6 +21,7 @@ import pathlib
 import time
 
 import numpy as np
+from _args import positive_int  # noqa: E402  (benchmarks/_args.py: this script's folder is on sys.path)
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -36,7 +37,7 @@ def main() -> None:
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", default="1-5")
-    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--repeat", type=positive_int, default=3)
     args = ap.parse_args()
     in_run, replayed, cpu = [], [], []
     for seed in parse_seeds(args.seeds):

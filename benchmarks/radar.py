@@ -56,6 +56,7 @@ import signal
 import sys
 import tempfile
 import time
+from _args import positive_int  # noqa: E402  (benchmarks/_args.py: this script's folder is on sys.path)
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 NETS = {"single": (ROOT / "nets" / "highway.net.xml", None),  # one 4000 m edge
@@ -369,7 +370,7 @@ def main(argv=None) -> None:
     ap.add_argument("--chunk", type=int, default=2, help="steps per turn (default 2 = 0.2 s simulated)")
     ap.add_argument("--cpu", type=int, default=None, help="CPU both sides are pinned to (default: the last allowed)")
     ap.add_argument("--sequential", action="store_true", help="the old way: one after the other in this process")
-    ap.add_argument("--repeat", type=int, default=3, help="--sequential: alternate N times, keep each's minimum")
+    ap.add_argument("--repeat", type=positive_int, default=3, help="--sequential: alternate N times, keep each's minimum")
     ap.add_argument("--no-sumo-collisions", action="store_true", help="SUMO's own collision check off on both sides")
     ap.add_argument("--plain", choices=("moved", "sumo", "moved_ssm"), default="moved",
                     help="moved: the plain side moves the egos by moveToXY too (default); sumo: SUMO moves them; "

@@ -24,6 +24,7 @@ sys.path.insert(0, str(ROOT))
 from sumo_avoid.runs import outputs, runner  # noqa: E402
 from sumo_avoid.core.config import ScenarioError  # noqa: E402
 from sumo_avoid.scenario import spec as scenario  # noqa: E402
+from _args import positive_int  # noqa: E402  (benchmarks/_args.py: this script's folder is on sys.path)
 
 DEFAULT = ("overtaking", "streets/signal_crossing_right")
 
@@ -31,7 +32,7 @@ DEFAULT = ("overtaking", "streets/signal_crossing_right")
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenario", action="append", default=None, help="scenario path under scenarios/, no .toml")
-    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--repeat", type=positive_int, default=5)
     ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
     args = ap.parse_args(argv)
     shares = []

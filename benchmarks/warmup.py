@@ -25,6 +25,7 @@ from sumo_avoid.rollout.loop import rollout  # noqa: E402
 from sumo_avoid.runs.runner import OpenRun  # noqa: E402
 from sumo_avoid.core.config import ScenarioError  # noqa: E402
 from sumo_avoid.scenario import spec as scenario  # noqa: E402
+from _args import positive_int  # noqa: E402  (benchmarks/_args.py: this script's folder is on sys.path)
 
 
 def _run(scn, whole_world: bool):
@@ -43,7 +44,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenario", default="streets/bologna_bus_lane", help="scenario path under scenarios/, no .toml")
     ap.add_argument("--end", type=float, default=320.0, help="simulated seconds each run lasts")
-    ap.add_argument("--repeat", type=int, default=1, help="turns per side")
+    ap.add_argument("--repeat", type=positive_int, default=1, help="turns per side")
     args = ap.parse_args(argv)
     try:
         scn = scenario.load(ROOT / "scenarios" / f"{args.scenario}.toml", ["output.plots=false", f"sim.duration_s={args.end}"])

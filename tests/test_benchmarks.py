@@ -194,3 +194,12 @@ def test_warmup_benchmark_compares_the_two_readings_and_prints_its_ratio():
     assert out.returncode == 0, out.stderr
     lines = out.stdout.strip().splitlines()
     assert "the same" in lines[0] and re.fullmatch(r"ratio=\d+\.\d{3}", lines[-1]), out.stdout
+
+
+@pytest.mark.parametrize("script", ["arena.py", "planner.py", "radar.py", "replay_record.py", "warmup.py"])
+def test_a_benchmark_asked_for_no_repeat_says_so_before_it_runs(script):
+    """``--repeat 0`` left nothing to take a median of (a StatisticsError traceback after the runs)."""
+    out = subprocess.run([sys.executable, str(ROOT / "benchmarks" / script), "--repeat", "0"],
+                         capture_output=True, text=True, timeout=120, cwd=ROOT)
+    assert out.returncode == 2 and out.stdout == "" and "Traceback" not in out.stderr
+    assert out.stderr.strip().splitlines()[-1].endswith("--repeat: invalid positive integer value: '0'")
